@@ -1,0 +1,65 @@
+# psph: `make run` (default scene on 2 ranks + pictures) and `make test` (serial + 2-rank).
+# Both bring the environment up through `make env`, which is idempotent and fast once done.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+VPY := $(VENV)/bin/python
+NP ?= 2
+OUT ?= runs/terzaghi
+
+# Open MPI refuses root and more ranks than cores unless told; users should not have to.
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+export OMPI_MCA_rmaps_base_oversubscribe := 1
+# Keep Open MPI from probing absent network fabrics (noisy warnings, slow start-up).
+export OMPI_MCA_btl := self,vader,tcp
+export OMPI_MCA_btl_vader_single_copy_mechanism := none
+# Numba caches compiled kernels beside the sources; one thread per rank.
+export NUMBA_NUM_THREADS := 1
+export OMP_NUM_THREADS := 1
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
+STAMP := $(VENV)/.psph-env-ok
+
+.PHONY: env run test test-serial test-mpi bench lint clean-env
+
+env: $(STAMP)
+
+$(STAMP): pyproject.toml
+	@if ! command -v mpicc >/dev/null || ! pkg-config --exists hdf5-openmpi 2>/dev/null; then \
+	  echo "make env: installing $(DEB_PKGS)"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $(DEB_PKGS) >/dev/null; \
+	fi
+	@[ -x $(VPY) ] || $(PYTHON) -m venv $(VENV)
+	$(VPY) -m pip install -q --upgrade pip 'setuptools>=77' wheel
+	$(VPY) -m pip install -q numpy cython pkgconfig mpi4py
+	@$(VPY) -c "import h5py, sys; sys.exit(0 if h5py.get_config().mpi else 1)" 2>/dev/null || \
+	  CC=mpicc HDF5_MPI=ON HDF5_PKGCONFIG_NAME=hdf5-openmpi \
+	  $(VPY) -m pip install -q --force-reinstall --no-deps --no-binary=h5py --no-build-isolation h5py
+	$(VPY) -m pip install -q -e '.[dev]'
+	$(VPY) -c "import h5py, mpi4py, numba; assert h5py.get_config().mpi, 'h5py lacks MPI'"
+	@touch $@
+
+run: env
+	mpirun -n $(NP) $(VPY) -m psph run terzaghi --out $(OUT)
+	$(VPY) -m psph plot $(OUT)
+
+test: test-serial test-mpi
+
+test-serial: env
+	$(VPY) -m pytest -q
+
+test-mpi: env
+	mpirun -n 2 $(VPY) -m pytest -q --with-mpi -m mpi -p no:cacheprovider tests
+
+bench: env
+	mpirun -n 1 $(VPY) bench/throughput.py
+	mpirun -n 2 $(VPY) bench/throughput.py
+
+lint: env
+	$(VENV)/bin/ruff check psph tests bench
+
+clean-env:
+	rm -rf $(VENV)

@@ -1,0 +1,5 @@
+import sys
+
+from psph.cli import main
+
+sys.exit(main())

@@ -1,0 +1,151 @@
+"""Slabs along one axis, one per rank, with halo exchange and migration every step.
+
+Each rank owns the particles whose coordinate along `axis` lies in [lo, hi). Every step,
+`exchange` sends to each neighbour rank in one message the particles that left the slab
+(migrants, full state) and the owned particles within `width` of the cut (halo, full
+state), and receives the same. A rank also keeps copies of its own migrants as halo for
+that step, since its neighbour packed its halo before knowing of them.
+"""
+
+import numpy as np
+from mpi4py import MPI
+
+from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
+from psph.particles import ParticleStore
+
+
+def slab_cuts(coords: np.ndarray, nranks: int) -> np.ndarray:
+    """Cut positions (nranks + 1,) giving each rank about the same number of particles;
+    the outer cuts are -inf and +inf."""
+    cuts = np.full(nranks + 1, np.inf)
+    cuts[0] = -np.inf
+    if nranks > 1:
+        c = np.sort(coords)
+        n = len(c)
+        for r in range(1, nranks):
+            k = min(max(r * n // nranks, 1), n - 1)
+            cuts[r] = 0.5 * (c[k - 1] + c[k])
+    return cuts
+
+
+class Slabs:
+    """Owns the communicator and the slab layout; the only place particles cross ranks."""
+
+    def __init__(self, axis: int, cuts: np.ndarray, comm=None):
+        self.comm = MPI.COMM_WORLD if comm is None else comm
+        self.rank = self.comm.Get_rank()
+        self.size = self.comm.Get_size()
+        self.axis = axis
+        self.cuts = np.asarray(cuts, float)
+        self.lo = self.cuts[self.rank]
+        self.hi = self.cuts[self.rank + 1]
+        self.down = self.rank - 1 if self.rank > 0 else MPI.PROC_NULL
+        self.up = self.rank + 1 if self.rank < self.size - 1 else MPI.PROC_NULL
+        self._idx_cap = 0
+        self._send = {}
+        self._recv = {}
+
+    # --------------------------------------------------------------- setup
+
+    def owned_mask(self, x: np.ndarray) -> np.ndarray:
+        c = x[:, self.axis]
+        return (c >= self.lo) & (c < self.hi)
+
+    # --------------------------------------------------------------- per step
+
+    def _index_buffers(self, n: int) -> None:
+        if n > self._idx_cap:
+            cap = max(n, int(1.5 * self._idx_cap), 64)
+            self._idx = {k: np.zeros(cap, np.int64)
+                         for k in ("md", "mu", "hd", "hu", "keep")}
+            self._idx_cap = cap
+
+    def _send_buffer(self, name: str, rows: int, width: int) -> np.ndarray:
+        buf = self._send.get(name)
+        if buf is None or buf.shape[0] < rows or buf.shape[1] != width:
+            buf = np.zeros((max(rows, 2 * (buf.shape[0] if buf is not None else 16)), width))
+            self._send[name] = buf
+        return buf
+
+    def exchange(self, store: ParticleStore, width: float) -> None:
+        """Migrate particles that left the slab and refill the halo (rows after owned)."""
+        store.n_halo = store.n_ghost = 0
+        if self.size == 1:
+            return
+        n = store.n_owned
+        self._index_buffers(n)
+        ix = self._idx
+        coord = store.x[:n, self.axis]
+        nmd, nmu, nhd, nhu, nk = select_slab_rows(
+            coord, n, self.lo, self.hi, width, self.down == MPI.PROC_NULL,
+            self.up == MPI.PROC_NULL, ix["md"], ix["mu"], ix["hd"], ix["hu"], ix["keep"])
+        w = store.row_width
+        # message: header row [n_migrants, n_halo, ...] then migrant rows, then halo rows
+        bufs = {}
+        for name, nm, nh, mi, hi_ in (("down", nmd, nhd, ix["md"], ix["hd"]),
+                                      ("up", nmu, nhu, ix["mu"], ix["hu"])):
+            buf = self._send_buffer(name, 1 + nm + nh, w)
+            buf[0, 0] = nm
+            buf[0, 1] = nh
+            pack_rows(store.all_rows, mi, nm, buf[1:1 + nm])
+            pack_rows(store.all_rows, hi_, nh, buf[1 + nm:1 + nm + nh])
+            bufs[name] = buf[:1 + nm + nh]
+        # own migrants stay as halo copies this step
+        own = self._send_buffer("own", nmd + nmu, w)
+        pack_rows(store.all_rows, ix["md"], nmd, own[:nmd])
+        pack_rows(store.all_rows, ix["mu"], nmu, own[nmd:nmd + nmu])
+        n_own_migr = nmd + nmu
+        if n_own_migr:
+            _compact(store, ix["keep"], nk)
+        store.n_owned = nk
+
+        reqs = [self.comm.Isend(bufs["up"], dest=self.up, tag=11),
+                self.comm.Isend(bufs["down"], dest=self.down, tag=12)]
+        received = []
+        for source, tag in ((self.down, 11), (self.up, 12)):
+            if source == MPI.PROC_NULL:
+                continue
+            status = MPI.Status()
+            self.comm.Probe(source=source, tag=tag, status=status)
+            rows = status.Get_count(MPI.DOUBLE) // w
+            rbuf = self._recv.get(tag)
+            if rbuf is None or rbuf.shape[0] < rows or rbuf.shape[1] != w:
+                rbuf = np.zeros((max(rows, 64, 2 * (0 if rbuf is None else rbuf.shape[0])), w))
+                self._recv[tag] = rbuf
+            rbuf = rbuf[:rows]
+            self.comm.Recv(rbuf, source=source, tag=tag)
+            nm, nh = int(rbuf[0, 0]), int(rbuf[0, 1])
+            # migrants become owned right away; halo rows are appended after all owned
+            store.ensure(store.n_owned + nm + 64)
+            unpack_rows(rbuf[1:1 + nm], nm, store.all_rows, store.n_owned)
+            store.n_owned += nm
+            received.append(rbuf[1 + nm:1 + nm + nh])
+        MPI.Request.Waitall(reqs)
+        start = store.n_owned
+        total_halo = sum(len(r) for r in received) + n_own_migr
+        store.ensure(start + total_halo + 64)
+        for r in received:
+            unpack_rows(r, len(r), store.all_rows, start)
+            start += len(r)
+        if n_own_migr:
+            unpack_rows(own, n_own_migr, store.all_rows, start)
+            start += n_own_migr
+        store.n_halo = start - store.n_owned
+
+    # --------------------------------------------------------------- reductions
+
+    def allreduce_sum(self, values: np.ndarray) -> np.ndarray:
+        out = np.empty_like(values)
+        self.comm.Allreduce(values, out, op=MPI.SUM)
+        return out
+
+    def allreduce_max(self, value: float) -> float:
+        return self.comm.allreduce(value, op=MPI.MAX)
+
+    def any(self, flag: bool) -> bool:
+        return bool(self.comm.allreduce(int(flag), op=MPI.MAX))
+
+
+def _compact(store: ParticleStore, keep: np.ndarray, nk: int) -> None:
+    for a in store.all_rows:
+        a[:nk] = a[keep[:nk]]

@@ -1,0 +1,1 @@
+"""Output: parallel HDF5 snapshots, XDMF sidecar, diagnostics history, summary."""

@@ -1,0 +1,1 @@
+"""Numba kernels: pure functions over arrays and scalars. No MPI, no I/O, no globals."""

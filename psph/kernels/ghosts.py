@@ -1,0 +1,72 @@
+"""Mirror ghost particles for walls (free-slip and fixed), as in Bui et al. (2008).
+
+A wall is a plane x[axis] = pos with the soil on the side `sign` (+1: soil at larger x).
+Ghosts mirror the real particles (owned and halo) within `reach` (= 2h) of a wall: position
+mirrored; velocity and acceleration with the normal component reversed (free slip) or both
+reversed (fixed, no slip); effective stress mirrored (shear component reversed); pressure,
+porosity, volume, density and permeability copied, so a wall is impermeable. Particles near
+two walls of different axes also get a corner ghost mirrored across both.
+"""
+
+import numba as nb
+
+
+@nb.njit(cache=True)
+def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
+            key):
+    x[dst, 0] = x[src, 0]
+    x[dst, 1] = x[src, 1]
+    x[dst, axis] = 2.0 * pos - x[src, axis]
+    for d in range(2):
+        if d == axis or fixed:
+            v[dst, d] = -v[src, d]
+            acc[dst, d] = -acc[src, d]
+        else:
+            v[dst, d] = v[src, d]
+            acc[dst, d] = acc[src, d]
+    stress[dst, 0] = stress[src, 0]
+    stress[dst, 1] = stress[src, 1]
+    stress[dst, 2] = stress[src, 2]
+    stress[dst, 3] = -stress[src, 3]
+    p[dst] = p[src]
+    p_prev[dst] = p_prev[src]
+    poro[dst] = poro[src]
+    vol[dst] = vol[src]
+    rho[dst] = rho[src]
+    perm[dst] = perm[src]
+    key[dst] = key[src]
+
+
+@nb.njit(cache=True)
+def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
+                x, v, stress, p, p_prev, poro, vol, rho, perm, acc, key):
+    """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
+    or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
+    per wall / corner, so the neighbour order is the same on any number of ranks."""
+    nw = wall_axis.shape[0]
+    g = n_real
+    for j in range(n_real):
+        for w in range(nw):
+            dw = wall_sign[w] * (x[j, wall_axis[w]] - wall_pos[w])
+            if dw < 0.0 or dw >= reach:
+                continue
+            if g >= cap:
+                return -1
+            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], x, v, stress, p, p_prev,
+                    poro, vol, rho, perm, acc, key)
+            key[g] = key[j] + key_stride * (1 + w)
+            g += 1
+            for w2 in range(w + 1, nw):
+                if wall_axis[w2] == wall_axis[w]:
+                    continue
+                d2 = wall_sign[w2] * (x[j, wall_axis[w2]] - wall_pos[w2])
+                if d2 < 0.0 or d2 >= reach:
+                    continue
+                if g >= cap:
+                    return -1
+                gg = g - 1
+                _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], x, v, stress, p,
+                        p_prev, poro, vol, rho, perm, acc, key)
+                key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
+                g += 1
+    return g - n_real

@@ -1,0 +1,179 @@
+"""The fused pair loop: every neighbour sum of one coupled step in one sweep.
+
+Each pair (a, b) with |x_a - x_b| < 2h is visited once (half stencil over the cell list)
+and contributes to both particles. The corrected gradient Eq. (22) needs the inverse of the
+moment matrix M_i = sum_j V_j (x_j - x_i) (x) grad_i W_ij, which is only known after the
+sweep; since the correction is linear, the sweep accumulates raw sums and `update.py`
+applies M_i^-1 afterwards. Columns of `sums` (one row per particle):
+
+  0-3   M[m, n]  = sum V_j r_ji^m  dW^n                     moment matrix, Eq. (22)
+  4-7   Gv[a, n] = sum V_j (v_j - v_i)^a dW^n               velocity gradient, Eq. (22)
+  8-9   Gp[n]    = sum V_j (p_j - p_i) dW^n                 pressure gradient, Eq. (22)
+  10-13 Gn[a, n] = sum V_j (1 - n_j)(v_j - v_i)^a dW^n      porosity rate, Eq. (24)
+  14-15 Q[m]     = sum V_j r_ji^m 2F_ij                     correction moment, Eq. (23)
+  16    sA       = sum A_ij,  A_ij = V_j kbar_ij 2F_ij      Eq. (33) (trace of D^mn is 2)
+  17    sAp      = sum A_ij p~_j,  p~ = p + alpha (p - p_prev)   Eq. (38)-(39)
+  18    sApsi    = sum A_ij (psi_j - psi_i),  psi = -rho_l b.x   elevation head, Eq. (25)
+  19-22 Ga[a, n] = sum V_j (k_j a_j - k_i a_i)^a dW^n       div(k dv/dt), Eq. (25)/(36)
+  23-24 dvdt     = sum V_j (sigma_i + sigma_j)/rho_i . dW - sum m_j Pi_ij dW  Eq. (26)
+
+with dW = grad_i W_ij (Eq. 21), F_ij = r_ji . grad_i W_ij / |r_ji|^2 and sigma the total
+stress sigma' - p I (Eq. 2). Only rows of owned particles (index < n_owned) are written.
+"""
+
+import math
+
+import numba as nb
+
+from psph.kernels.spline import dw_cubic
+
+NSUMS = 25
+
+
+@nb.njit(cache=True, error_model="numpy")
+def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
+              cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
+              rho_l_b0, rho_l_b1, coupled, acc_term, sums):
+    """Accumulate the sums listed in the module docstring for particles 0..n_owned-1.
+
+    coupled: pressure-related sums (Gp, Gn, Q, sA, sAp, sApsi) are computed;
+    acc_term: the div(k dv/dt) sums (Ga) are computed. rho_l_b = rho_l * body force (N/m^3).
+    """
+    for i in range(n_owned):
+        for c in range(NSUMS):
+            sums[i, c] = 0.0
+    ncx = ncell[0]
+    ncy = ncell[1]
+    support2 = 4.0 * h * h
+    eps2 = 0.01 * h * h
+    for cy in range(ncy):
+        for cx in range(ncx):
+            c = cy * ncx + cx
+            for sa in range(cell_start[c], cell_start[c + 1]):
+                a = order[sa]
+                # half stencil: rest of own cell, then (+1,0), (-1,+1), (0,+1), (+1,+1)
+                for k in range(5):
+                    if k == 0:
+                        nc = c
+                        s0 = sa + 1
+                    else:
+                        if k == 1:
+                            ox, oy = 1, 0
+                        elif k == 2:
+                            ox, oy = -1, 1
+                        elif k == 3:
+                            ox, oy = 0, 1
+                        else:
+                            ox, oy = 1, 1
+                        nx = cx + ox
+                        ny = cy + oy
+                        if nx < 0 or nx >= ncx or ny >= ncy:
+                            continue
+                        nc = ny * ncx + nx
+                        s0 = cell_start[nc]
+                    for sb in range(s0, cell_start[nc + 1]):
+                        b = order[sb]
+                        own_a = a < n_owned
+                        own_b = b < n_owned
+                        if not (own_a or own_b):
+                            continue
+                        dx0 = x[b, 0] - x[a, 0]
+                        dx1 = x[b, 1] - x[a, 1]
+                        r2 = dx0 * dx0 + dx1 * dx1
+                        if r2 >= support2 or r2 == 0.0:
+                            continue
+                        r = math.sqrt(r2)
+                        dw = dw_cubic(r, h)
+                        g0 = -dw * dx0 / r  # grad_a W_ab; grad_b W_ba = -g
+                        g1 = -dw * dx1 / r
+                        f2 = -2.0 * dw / r  # 2 F_ab >= 0
+                        va = vol[a]
+                        vb = vol[b]
+                        dv0 = v[b, 0] - v[a, 0]
+                        dv1 = v[b, 1] - v[a, 1]
+                        # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
+                        sxx = stress[a, 0] + stress[b, 0] - p[a] - p[b]
+                        syy = stress[a, 1] + stress[b, 1] - p[a] - p[b]
+                        sxy = stress[a, 3] + stress[b, 3]
+                        f0 = sxx * g0 + sxy * g1
+                        f1 = sxy * g0 + syy * g1
+                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26)
+                        pi_ab = 0.0
+                        vdotr = dv0 * dx0 + dv1 * dx1
+                        if vdotr < 0.0:
+                            mu = h * vdotr / (r2 + eps2)
+                            pi_ab = (-av_alpha * c_sound * mu + av_beta * mu * mu) / (
+                                0.5 * (rho[a] + rho[b]))
+                        if coupled:
+                            dp = p[b] - p[a]
+                            kbar = 0.5 * (perm[a] + perm[b])
+                            pta = p[a] + tpi_alpha * (p[a] - p_prev[a])
+                            ptb = p[b] + tpi_alpha * (p[b] - p_prev[b])
+                            dpsi = -(rho_l_b0 * dx0 + rho_l_b1 * dx1)
+                        if own_a:
+                            s = sums[a]
+                            s[0] += vb * dx0 * g0
+                            s[1] += vb * dx0 * g1
+                            s[2] += vb * dx1 * g0
+                            s[3] += vb * dx1 * g1
+                            s[4] += vb * dv0 * g0
+                            s[5] += vb * dv0 * g1
+                            s[6] += vb * dv1 * g0
+                            s[7] += vb * dv1 * g1
+                            s[23] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
+                            s[24] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
+                            if coupled:
+                                s[8] += vb * dp * g0
+                                s[9] += vb * dp * g1
+                                wn = vb * (1.0 - poro[b])
+                                s[10] += wn * dv0 * g0
+                                s[11] += wn * dv0 * g1
+                                s[12] += wn * dv1 * g0
+                                s[13] += wn * dv1 * g1
+                                s[14] += vb * dx0 * f2
+                                s[15] += vb * dx1 * f2
+                                aab = vb * kbar * f2
+                                s[16] += aab
+                                s[17] += aab * ptb
+                                s[18] += aab * dpsi
+                        if own_b:
+                            s = sums[b]
+                            s[0] += va * dx0 * g0
+                            s[1] += va * dx0 * g1
+                            s[2] += va * dx1 * g0
+                            s[3] += va * dx1 * g1
+                            s[4] += va * dv0 * g0
+                            s[5] += va * dv0 * g1
+                            s[6] += va * dv1 * g0
+                            s[7] += va * dv1 * g1
+                            s[23] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
+                            s[24] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
+                            if coupled:
+                                s[8] += va * dp * g0
+                                s[9] += va * dp * g1
+                                wn = va * (1.0 - poro[a])
+                                s[10] += wn * dv0 * g0
+                                s[11] += wn * dv0 * g1
+                                s[12] += wn * dv1 * g0
+                                s[13] += wn * dv1 * g1
+                                s[14] -= va * dx0 * f2
+                                s[15] -= va * dx1 * f2
+                                aba = va * kbar * f2
+                                s[16] += aba
+                                s[17] += aba * pta
+                                s[18] -= aba * dpsi
+                        if acc_term and coupled:
+                            ka0 = perm[b] * acc[b, 0] - perm[a] * acc[a, 0]
+                            ka1 = perm[b] * acc[b, 1] - perm[a] * acc[a, 1]
+                            if own_a:
+                                s = sums[a]
+                                s[19] += vb * ka0 * g0
+                                s[20] += vb * ka0 * g1
+                                s[21] += vb * ka1 * g0
+                                s[22] += vb * ka1 * g1
+                            if own_b:
+                                s = sums[b]
+                                s[19] += va * ka0 * g0
+                                s[20] += va * ka0 * g1
+                                s[21] += va * ka1 * g0
+                                s[22] += va * ka1 * g1

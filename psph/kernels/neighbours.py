@@ -1,0 +1,82 @@
+"""Cell-linked lists with particles sorted by cell, and id order inside a cell.
+
+Cells are squares of side >= 2h on a grid anchored at a global origin, so a cell's integer
+coordinates are the same on every rank. Cells are numbered row-major (y, then x): the local
+numbering is the restriction of the global one, and with particles in key order inside a
+cell every particle sees its neighbours in the same order on any number of ranks. That is
+what makes 1-rank and N-rank runs bitwise identical.
+"""
+
+import numba as nb
+import numpy as np
+
+
+@nb.njit(cache=True)
+def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, fill, order):
+    """Counting sort of particles 0..n-1 into cells, then insertion sort by key in a cell.
+
+    x: (cap, 2) positions; key: (cap,) global sort keys; origin: (2,) global grid origin;
+    lo: (2,) int64 lowest local cell coordinates; ncell: (2,) int64 local grid size.
+    Outputs (preallocated): cell_of (cap,), cell_start (>= ncx*ncy + 1,), fill (>= ncx*ncy,)
+    scratch, order (cap,).
+    Returns False if a particle falls outside the local grid.
+    """
+    ncx = ncell[0]
+    ncy = ncell[1]
+    nc = ncx * ncy
+    for c in range(nc + 1):
+        cell_start[c] = 0
+    for i in range(n):
+        cx = int(np.floor((x[i, 0] - origin[0]) / cell_size)) - lo[0]
+        cy = int(np.floor((x[i, 1] - origin[1]) / cell_size)) - lo[1]
+        if cx < 0 or cy < 0 or cx >= ncx or cy >= ncy:
+            return False
+        c = cy * ncx + cx
+        cell_of[i] = c
+        cell_start[c + 1] += 1
+    for c in range(nc):
+        cell_start[c + 1] += cell_start[c]
+    # stable scatter, then order each cell by key (cells hold a handful of particles)
+    for c in range(nc):
+        fill[c] = cell_start[c]
+    for i in range(n):
+        c = cell_of[i]
+        order[fill[c]] = i
+        fill[c] += 1
+    for c in range(nc):
+        s = cell_start[c]
+        e = cell_start[c + 1]
+        for a in range(s + 1, e):
+            p = order[a]
+            kp = key[p]
+            b = a - 1
+            while b >= s and key[order[b]] > kp:
+                order[b + 1] = order[b]
+                b -= 1
+            order[b + 1] = p
+    return True
+
+
+@nb.njit(cache=True)
+def grid_bounds(x, n, origin, cell_size, lo, ncell):
+    """Lowest cell coordinates `lo` and grid size `ncell` covering particles 0..n-1, with a
+    one-cell margin (written into the two int64 (2,) outputs)."""
+    if n == 0:
+        lo[0] = 0
+        lo[1] = 0
+        ncell[0] = 1
+        ncell[1] = 1
+        return
+    c0min = c1min = 1 << 62
+    c0max = c1max = -(1 << 62)
+    for i in range(n):
+        c0 = int(np.floor((x[i, 0] - origin[0]) / cell_size))
+        c1 = int(np.floor((x[i, 1] - origin[1]) / cell_size))
+        c0min = min(c0min, c0)
+        c0max = max(c0max, c0)
+        c1min = min(c1min, c1)
+        c1max = max(c1max, c1)
+    lo[0] = c0min - 1
+    lo[1] = c1min - 1
+    ncell[0] = c0max - c0min + 3
+    ncell[1] = c1max - c1min + 3

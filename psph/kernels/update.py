@@ -1,0 +1,115 @@
+"""Per-particle update of one step from the sums of `interactions.pair_sums`.
+
+Applies the correction matrix of Eq. (22), then advances (leapfrog, Eq. 27) the effective
+stress (linear elastic, Jaumann rate, Eq. 11 without plasticity; plane strain), the
+porosity (Eq. 24), the pore pressure (explicit Eq. 25 or TPI Eq. 38-39), the velocity
+(Eq. 45: Eq. 26 + global damping Eq. 43-44 + body force + surface loads) and the position.
+"""
+
+import numba as nb
+
+from psph.kernels.interactions import NSUMS  # noqa: F401  (column layout documented there)
+
+SCHEME_NONE = 0
+SCHEME_EXPLICIT = 1
+SCHEME_TPI = 2
+
+
+@nb.njit(cache=True, inline="always")
+def _inverse_moment(s):
+    """Inverse of the 2x2 moment matrix (row-major m00, m01, m10, m11); identity (no
+    correction) where it is near-singular, e.g. a particle with too few neighbours."""
+    det = s[0] * s[3] - s[1] * s[2]
+    if abs(det) < 1e-3:
+        return 1.0, 0.0, 0.0, 1.0
+    inv = 1.0 / det
+    return s[3] * inv, -s[1] * inv, -s[2] * inv, s[0] * inv
+
+
+@nb.njit(cache=True, error_model="numpy")
+def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
+            acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
+            bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, acc_term):
+    """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
+    with a non-finite pressure or velocity, or -1.
+
+    lam, shear: Lame constants (Pa); bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3);
+    (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
+    1 explicit Eq. (25), 2 TPI Eq. (38); p = 0 is imposed where drained_from <= t.
+    """
+    bad = -1
+    inv_g = rho_l / gamma_l
+    for i in range(n_owned):
+        s = sums[i]
+        m00, m01, m10, m11 = _inverse_moment(s)
+        # velocity gradient L[a, b] = dv_a/dx_b = Gv[a, n] Minv[n, b]   (Eq. 22)
+        l00 = s[4] * m00 + s[5] * m10
+        l01 = s[4] * m01 + s[5] * m11
+        l10 = s[6] * m00 + s[7] * m10
+        l11 = s[6] * m01 + s[7] * m11
+        div_v = l00 + l11
+
+        # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
+        e01 = 0.5 * (l01 + l10)
+        w = 0.5 * (l01 - l10)
+        sxx = stress[i, 0]
+        syy = stress[i, 1]
+        sxy = stress[i, 3]
+        stress[i, 0] = sxx + dt * ((lam + 2.0 * shear) * l00 + lam * l11 + 2.0 * w * sxy)
+        stress[i, 1] = syy + dt * (lam * l00 + (lam + 2.0 * shear) * l11 - 2.0 * w * sxy)
+        stress[i, 2] += dt * lam * div_v
+        stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
+
+        if scheme != SCHEME_NONE:
+            # porosity rate, Eq. (24): trace(Gn Minv)
+            dn = s[10] * m00 + s[11] * m10 + s[12] * m01 + s[13] * m11
+            # corrected pressure gradient (Eq. 22) and the Eq. (23) correction term
+            gp0 = s[8] * m00 + s[9] * m10
+            gp1 = s[8] * m01 + s[9] * m11
+            q0 = s[14]
+            q1 = s[15]
+            e_i = perm[i] * (gp0 * q0 + gp1 * q1)
+            # elevation head: div(k grad psi), psi = -rho_l b.x, with the same correction
+            head = s[18] + perm[i] * rho_l * (b0 * q0 + b1 * q1)
+            div_ka = 0.0
+            if acc_term:
+                div_ka = s[19] * m00 + s[20] * m10 + s[21] * m01 + s[22] * m11
+            if drained_from[i] <= t:
+                p[i] = 0.0
+                p_prev[i] = 0.0
+            elif scheme == SCHEME_EXPLICIT:
+                lap = s[17] - p[i] * s[16] - e_i + head  # div(k grad(p + psi)), Eq. (23)
+                rate = bulk_water / poro[i] * (lap / gamma_l - div_v + inv_g * div_ka)
+                p_prev[i] = p[i]
+                p[i] += dt * rate
+            elif s[16] > 0.0:
+                # TPI, Eq. (38) with B of Eq. (36); s[17] holds sum A_ij p_j^(t+alpha)
+                b_i = -gamma_l * div_v + head + rho_l * div_ka - e_i
+                p_new = (b_i + s[17]) / s[16]
+                p_prev[i] = p[i]
+                p[i] = p_new
+            n_new = poro[i] + dt * dn
+            poro[i] = n_new
+            vol[i] = vol0[i] * (1.0 - poro0[i]) / (1.0 - n_new)
+            rho[i] = (1.0 - n_new) * rho_s + n_new * rho_l
+
+        # momentum, Eq. (45)
+        a0 = s[23] + b0 - damping * v[i, 0]
+        a1 = s[24] + b1 - damping * v[i, 1]
+        li = int(load_index[i])
+        if li >= 0:
+            mass = rho[i] * vol[i]
+            a0 += load_value[li] * traction[i, 0] / mass
+            a1 += load_value[li] * traction[i, 1] / mass
+        acc[i, 0] = a0
+        acc[i, 1] = a1
+        v[i, 0] += dt * a0
+        v[i, 1] += dt * a1
+        x[i, 0] += dt * v[i, 0]
+        x[i, 1] += dt * v[i, 1]
+        u[i, 0] += dt * v[i, 0]
+        u[i, 1] += dt * v[i, 1]
+        if bad < 0:
+            if not (abs(p[i]) < 1e300 and abs(v[i, 0]) < 1e300 and abs(v[i, 1]) < 1e300):
+                bad = i
+    return bad

@@ -1,0 +1,107 @@
+"""Structure-of-arrays particle state.
+
+Rows 0..n_owned-1 are the particles this rank advances; then n_halo copies of neighbours'
+particles; then n_ghost wall ghosts. Every field is a float64 array of shape (cap,) or
+(cap, ncomp) allocated once with spare capacity and grown (never per step).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Field:
+    """A particle field: name, components, SI unit, meaning, and whether the pair loop reads
+    it on neighbours (then it travels in halo messages and is mirrored on ghosts)."""
+
+    name: str
+    ncomp: int
+    unit: str
+    description: str
+    neighbour: bool
+
+
+FIELDS: tuple[Field, ...] = (
+    Field("key", 1, "1", "stable global particle id (exact in float64 below 2**53)", True),
+    Field("x", 2, "m", "position", True),
+    Field("v", 2, "m/s", "velocity", True),
+    Field("stress", 4, "Pa", "effective stress xx, yy, zz, xy (tension positive)", True),
+    Field("p", 1, "Pa", "pore-water pressure (compression positive)", True),
+    Field("p_prev", 1, "Pa", "pore pressure one step back, for TPI Eq. (39)", True),
+    Field("poro", 1, "1", "porosity n", True),
+    Field("vol", 1, "m^2", "particle volume per unit thickness", True),
+    Field("rho", 1, "kg/m^3", "mixture density (1 - n) rho_s + n rho_l", True),
+    Field("perm", 1, "m/s", "hydraulic conductivity k", True),
+    Field("acc", 2, "m/s^2", "acceleration of the last step", True),
+    Field("u", 2, "m", "displacement from the initial position", False),
+    Field("poro0", 1, "1", "initial porosity", False),
+    Field("vol0", 1, "m^2", "initial volume", False),
+    Field("eps_p", 1, "1", "equivalent plastic strain", False),
+    Field("drained_from", 1, "s", "time from which p = 0 is imposed (inf: never)", False),
+    Field("surface", 1, "1", "1 on the loaded surface layer (settlement diagnostics)", False),
+    Field("load_index", 1, "1", "index of the surface load acting on the particle, or -1", False),
+    Field("traction", 2, "m", "outward tributary area vector -n dA of a loaded particle", False),
+)
+
+FIELD_BY_NAME = {f.name: f for f in FIELDS}
+NEIGHBOUR_FIELDS = tuple(f.name for f in FIELDS if f.neighbour)
+
+
+class ParticleStore:
+    """Owns the arrays; exposes them as attributes (`store.p`, `store.x`, ...)."""
+
+    def __init__(self, capacity: int):
+        self.cap = 0
+        self.n_owned = 0
+        self.n_halo = 0
+        self.n_ghost = 0
+        self.arrays: dict[str, np.ndarray] = {}
+        self._allocate(max(int(capacity), 16))
+
+    def _allocate(self, cap: int) -> None:
+        old = self.arrays
+        n_keep = self.n_owned + self.n_halo + self.n_ghost
+        self.arrays = {}
+        for f in FIELDS:
+            shape = (cap,) if f.ncomp == 1 else (cap, f.ncomp)
+            a = np.zeros(shape)
+            if f.name in old:
+                a[:n_keep] = old[f.name][:n_keep]
+            self.arrays[f.name] = a
+            setattr(self, f.name, a)
+        self.cap = cap
+        self.all_rows = tuple(self._as2d(f.name) for f in FIELDS)
+        self.neighbour_rows = tuple(self._as2d(n) for n in NEIGHBOUR_FIELDS)
+        self.row_width = sum(f.ncomp for f in FIELDS)
+
+    def _as2d(self, name: str) -> np.ndarray:
+        a = self.arrays[name]
+        return a.reshape(a.shape[0], -1)
+
+    def ensure(self, rows: int) -> bool:
+        """Grow (by 1.5x at least) so that `rows` rows fit; True if the arrays moved."""
+        if rows <= self.cap:
+            return False
+        self._allocate(max(rows, int(1.5 * self.cap)))
+        return True
+
+    @property
+    def n_real(self) -> int:
+        return self.n_owned + self.n_halo
+
+    @property
+    def n_total(self) -> int:
+        return self.n_owned + self.n_halo + self.n_ghost
+
+    def owned(self, name: str) -> np.ndarray:
+        return self.arrays[name][: self.n_owned]
+
+    def load(self, data: dict[str, np.ndarray]) -> None:
+        """Set the owned particles from full arrays (missing fields stay zero)."""
+        n = len(next(iter(data.values())))
+        self.n_halo = self.n_ghost = 0
+        self.ensure(2 * n + 64)
+        self.n_owned = n
+        for name, a in data.items():
+            self.arrays[name][:n] = a

@@ -1,0 +1,50 @@
+"""Initial particle state of a scene (global arrays, identical on every rank)."""
+
+import math
+
+import numpy as np
+
+from psph.scenes.geometry import lattice_block, surface_layer
+
+_NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
+
+
+def initial_particles(scene) -> dict[str, np.ndarray]:
+    """Positions, ids and every field's initial value for all particles of the scene."""
+    dx = scene.particles.dx
+    x = np.concatenate([lattice_block(b.min, b.max, dx) for b in scene.particles.blocks])
+    n = len(x)
+    m = scene.material
+    poro = np.full(n, m.porosity)
+    vol = np.full(n, dx * dx)
+    rho = (1 - poro) * m.rho_s + poro * m.rho_l
+    data = {
+        "key": np.arange(n, dtype=float),
+        "x": x,
+        "poro": poro,
+        "poro0": poro.copy(),
+        "vol": vol,
+        "vol0": vol.copy(),
+        "rho": rho,
+        "perm": np.full(n, m.k),
+        "drained_from": np.full(n, math.inf),
+        "load_index": np.full(n, -1.0),
+        "traction": np.zeros((n, 2)),
+        "surface": np.zeros(n),
+    }
+    for side in ("left", "right", "bottom", "top"):
+        b = getattr(scene.boundaries, side)
+        if b.flow == "drained":
+            layer = surface_layer(x, side, dx)
+            data["drained_from"][layer] = np.minimum(data["drained_from"][layer],
+                                                     b.drained_from)
+    for i, load in enumerate(scene.loads):
+        layer = surface_layer(x, load.side, dx)
+        if load.range is not None:
+            along = x[:, 1] if load.side in ("left", "right") else x[:, 0]
+            layer &= (along >= load.range[0]) & (along <= load.range[1])
+        normal = np.array(_NORMALS[load.side])
+        data["load_index"][layer] = i
+        data["traction"][layer] = -normal * dx  # pressure pushes inward over length dx
+        data["surface"][layer] = 1.0
+    return data

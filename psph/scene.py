@@ -1,0 +1,313 @@
+"""TOML scene -> validated, fully resolved `Scene`.
+
+Layers: model defaults < scene file < `--set key.path=value`. Unknown keys, wrong types and
+out-of-range values raise `SceneError` with one line naming the key, the value and the rule.
+"""
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Annotated, Literal
+
+import tomli_w
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from psph.errors import SceneError
+
+Pos = Annotated[float, Field(gt=0)]
+Vec2 = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+SIDES = ("left", "right", "bottom", "top")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, validate_default=True)
+
+
+class Domain(_Model):
+    """The box bounded by the walls (m)."""
+
+    min: Vec2
+    max: Vec2
+
+
+class Block(_Model):
+    """A rectangle of soil filled with particles on a square lattice."""
+
+    min: Vec2
+    max: Vec2
+
+
+class Particles(_Model):
+    dx: Pos
+    h_factor: Annotated[float, Field(ge=1.0, le=2.0)] = 1.2  # h = 1.2 dx (Section 3.1)
+    blocks: Annotated[list[Block], Field(min_length=1)]
+
+
+class Material(_Model):
+    """Linear elastic saturated soil (Section 4.1 units: Pa, kg/m^3, m/s)."""
+
+    model: Literal["elastic"] = "elastic"
+    E: Pos
+    nu: Annotated[float, Field(gt=-1.0, lt=0.5)]
+    porosity: Annotated[float, Field(gt=0.0, lt=1.0)]
+    rho_s: Pos
+    rho_l: Pos = 1000.0
+    K_l: Pos = 1.0e9
+    k: Pos
+    g_ref: Pos = 9.81  # converts hydraulic conductivity k: gamma_l = rho_l g_ref
+
+
+class Boundary(_Model):
+    """One side of the domain box: wall motion and pore-water flow condition."""
+
+    motion: Literal["free", "slip", "fixed"] = "free"
+    flow: Literal["impermeable", "drained"] = "impermeable"
+    drained_from: Annotated[float, Field(ge=0.0)] = 0.0  # s; before it the side is impermeable
+
+
+class Boundaries(_Model):
+    left: Boundary = Boundary()
+    right: Boundary = Boundary()
+    bottom: Boundary = Boundary()
+    top: Boundary = Boundary()
+
+
+class Load(_Model):
+    """Distributed normal pressure on the outer particle layer of one side (Pa)."""
+
+    side: Literal["left", "right", "bottom", "top"] = "top"
+    pressure: float
+    history: Literal["ramp", "harmonic"] = "ramp"
+    ramp: Annotated[float, Field(ge=0.0)] = 0.0  # s: linear rise to `pressure`, then hold
+    omega: Annotated[float, Field(ge=0.0)] = 0.0  # rad/s: pressure * (1 - cos(omega t))
+    range: Vec2 | None = None  # extent along the side (m); default: the whole side
+
+
+class Pressure(_Model):
+    """Pore-pressure update: explicit Eq. (25), TPI Eq. (38)-(39), or none (dry)."""
+
+    scheme: Literal["tpi", "explicit", "none"] = "tpi"
+    alpha: Annotated[float, Field(ge=0.0, le=1.0)] = 0.5
+    R: Pos = 17.0  # TPI amplifier of the fluid time step, Eq. (40)
+    explicit_until: Annotated[float, Field(ge=0.0)] = 0.0  # s: explicit Eq. (25) before this
+    acceleration_term: bool = False  # div(k dv/dt)/g of Eq. (25)/(36); see README
+
+
+class Time(_Model):
+    end: Pos | None = None  # s; default: the last verification time
+    dt: Pos | None = None  # s; default: Eq. (40)-(42)
+    cfl_solid: Pos = 0.1  # C_CFL^s of Eq. (41)
+    cfl_fluid: Pos = 0.1  # C_CFL^l of Eq. (42)
+    allow_dt_above_solid_limit: bool = False
+
+
+class Stabilisation(_Model):
+    damping: Annotated[float, Field(ge=0.0)] = 0.0  # eta_d of Eq. (44)
+    av_alpha: Annotated[float, Field(ge=0.0)] = 0.1  # artificial viscosity in C_ij, Eq. (26)
+    av_beta: Annotated[float, Field(ge=0.0)] = 0.1
+
+
+class Output(_Model):
+    times: list[Annotated[float, Field(ge=0.0)]] = []  # s
+    interval: Annotated[float, Field(ge=0.0)] = 0.0  # s; 0: only `times` and the end
+    history_interval: Pos = 1.0e-3  # s between diagnostics rows (settlement, energy)
+
+
+class Verification(_Model):
+    reference: Literal["none", "terzaghi"] = "none"
+    tv: list[Pos] = []  # time factors T_v at which to snapshot and compare
+
+
+class Decomposition(_Model):
+    axis: Literal["auto", "x", "y"] = "auto"
+
+
+class Scene(_Model):
+    name: str
+    description: str = ""
+    dim: Literal[2] = 2
+    gravity: Vec2 = [0.0, 0.0]
+    domain: Domain
+    particles: Particles
+    material: Material
+    boundaries: Boundaries = Boundaries()
+    loads: list[Load] = []
+    pressure: Pressure = Pressure()
+    time: Time = Time()
+    stabilisation: Stabilisation = Stabilisation()
+    output: Output = Output()
+    verification: Verification = Verification()
+    decomposition: Decomposition = Decomposition()
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "Scene":
+        lo, hi = self.domain.min, self.domain.max
+        for d in range(2):
+            if hi[d] <= lo[d]:
+                raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
+        for ib, b in enumerate(self.particles.blocks):
+            for d in range(2):
+                if b.max[d] <= b.min[d]:
+                    raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
+                                f"must exceed particles.blocks[{ib}].min[{d}] = {b.min[d]}")
+                if b.min[d] < lo[d] - 1e-12:
+                    raise _Rule(f"particles.blocks[{ib}].min[{d}]", b.min[d],
+                                f"particles outside the walls (domain.min[{d}] = {lo[d]})")
+                if b.max[d] > hi[d] + 1e-12:
+                    raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
+                                f"particles outside the walls (domain.max[{d}] = {hi[d]})")
+        if self.time.end is None:
+            if self.verification.reference == "none" or not self.verification.tv:
+                raise _Rule("time.end", None, "required (no verification.tv to derive it from)")
+        if self.time.dt is not None and not self.time.allow_dt_above_solid_limit:
+            limit = solid_dt_limit(self)
+            if self.time.dt > limit:
+                raise _Rule("time.dt", self.time.dt,
+                            f"above the solid limit Eq. (41) {limit:.3e} s "
+                            "(set time.allow_dt_above_solid_limit = true to force)")
+        return self
+
+    @property
+    def h(self) -> float:
+        return self.particles.h_factor * self.particles.dx
+
+
+class _Rule(ValueError):
+    def __init__(self, key: str, value, rule: str):
+        super().__init__(rule)
+        self.key, self.value, self.rule = key, value, rule
+
+
+def solid_dt_limit(scene: Scene) -> float:
+    """Delta t_s of Eq. (41): C_s h / c_sp with c_sp = sqrt(E / rho_s)."""
+    m = scene.material
+    return scene.time.cfl_solid * scene.h / math.sqrt(m.E / m.rho_s)
+
+
+def fluid_dt_limit(scene: Scene) -> float:
+    """Delta t_l of Eq. (42): C_l n gamma_l h^2 / (K_l k)."""
+    m = scene.material
+    gamma = m.rho_l * m.g_ref
+    return scene.time.cfl_fluid * m.porosity * gamma * scene.h**2 / (m.K_l * m.k)
+
+
+# ---------------------------------------------------------------------------- loading
+
+
+def builtin_dir() -> Path:
+    return Path(__file__).parent / "scenes"
+
+
+def builtin_names() -> list[str]:
+    return sorted(p.stem for p in builtin_dir().glob("*.toml"))
+
+
+def read_scene_text(source: str) -> tuple[str, str]:
+    """(TOML text, label) for a built-in name or a file path."""
+    if source in builtin_names():
+        path = builtin_dir() / f"{source}.toml"
+    else:
+        path = Path(source)
+        if not path.is_file():
+            known = ", ".join(builtin_names())
+            raise SceneError(f"scene '{source}': no such file or built-in scene ({known})")
+    try:
+        return path.read_text(), str(path)
+    except OSError as e:
+        raise SceneError(f"scene '{source}': cannot read: {e.strerror}") from None
+
+
+def parse_toml(text: str, label: str) -> dict:
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"{label}: not valid TOML: {e}") from None
+
+
+def apply_override(data: dict, assignment: str) -> None:
+    """Apply one `key.path=value` (value in TOML syntax; bare words are strings)."""
+    if "=" not in assignment:
+        raise SceneError(f"--set '{assignment}': expected key.path=value")
+    path, raw = (s.strip() for s in assignment.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    keys = path.split(".")
+    node = data
+    for i, k in enumerate(keys[:-1]):
+        nxt = int(k) if isinstance(node, list) and k.isdigit() else k
+        try:
+            node = node[nxt]
+        except (KeyError, IndexError, TypeError):
+            if isinstance(node, dict):
+                node[nxt] = {}
+                node = node[nxt]
+            else:
+                raise SceneError(f"--set {path}: '{'.'.join(keys[:i + 1])}' does not exist") \
+                    from None
+    last = keys[-1]
+    if isinstance(node, list) and last.isdigit():
+        if int(last) >= len(node):
+            raise SceneError(f"--set {path}: index {last} out of range")
+        node[int(last)] = value
+    elif isinstance(node, dict):
+        node[last] = value
+    else:
+        raise SceneError(f"--set {path}: '{'.'.join(keys[:-1])}' is not a table")
+
+
+def _loc(loc: tuple) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+def validate(data: dict, label: str = "scene") -> Scene:
+    """Validate a raw scene dict; on the first problem raise SceneError (one line)."""
+    try:
+        return Scene.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        ctx_err = (err.get("ctx") or {}).get("error")
+        if isinstance(ctx_err, _Rule):
+            raise SceneError(f"{label}: {ctx_err.key} = {ctx_err.value!r}: {ctx_err.rule}") \
+                from None
+        key = _loc(err["loc"])
+        if err["type"] == "extra_forbidden":
+            raise SceneError(f"{label}: unknown key '{key}'") from None
+        if err["type"] == "missing":
+            raise SceneError(f"{label}: {key}: required key is missing") from None
+        value = err.get("input")
+        rule = err["msg"][0].lower() + err["msg"][1:]
+        raise SceneError(f"{label}: {key} = {value!r}: {rule}") from None
+
+
+def load_scene(source: str, overrides: list[str] | None = None) -> Scene:
+    """Built-in name or path -> validated, fully resolved Scene."""
+    text, label = read_scene_text(source)
+    data = parse_toml(text, label)
+    for ov in overrides or []:
+        apply_override(data, ov)
+    scene = validate(data, label)
+    return resolve(scene)
+
+
+def resolve(scene: Scene) -> Scene:
+    """Fill values derived from others (end time from the verification times)."""
+    if scene.time.end is None:
+        from psph.verify import reference_times
+
+        t = reference_times(scene)
+        scene = scene.model_copy(deep=True)
+        scene.time.end = float(max(t))
+    return scene
+
+
+def to_toml(scene: Scene) -> str:
+    return tomli_w.dumps(scene.model_dump(exclude_none=True))

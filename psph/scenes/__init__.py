@@ -1,0 +1,1 @@
+"""Built-in scenes (*.toml beside this file) and geometry builders."""

@@ -1,0 +1,223 @@
+"""Builds the step pipeline once from the scene and runs the time loop.
+
+Per step: exchange (migration + halo) -> ghosts (walls) -> neighbours (cell lists) ->
+interactions (fused pair sums) -> update (Eq. 22-27, 38-45). Outputs, diagnostics and
+progress are scheduled callbacks of the loop; every decision that changes control flow
+comes from a collective or from values identical on all ranks (time, step).
+"""
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from psph.errors import NumericalError
+from psph.kernels.ghosts import make_ghosts
+from psph.kernels.interactions import NSUMS, pair_sums
+from psph.kernels.neighbours import bin_particles, grid_bounds
+from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance
+from psph.particles import ParticleStore
+from psph.physics.initial import initial_particles
+from psph.physics.loads import load_values
+from psph.physics.material import soil_from_scene
+from psph.scene import Scene, fluid_dt_limit, solid_dt_limit
+
+_SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
+              "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
+
+
+@dataclass
+class Stage:
+    """One named stage of a step; `seconds` accumulates its wall time on this rank."""
+
+    name: str
+    run: callable
+    seconds: float = 0.0
+    calls: int = 0
+
+
+@dataclass
+class TimeStepping:
+    """Time step of each phase (Eq. 40-42) and the scheme in force."""
+
+    dt_main: float
+    dt_explicit: float
+    scheme_main: int
+    explicit_until: float
+    limits: dict = field(default_factory=dict)
+
+    def at(self, t: float) -> tuple[float, int]:
+        if self.scheme_main == SCHEME_TPI and t < self.explicit_until:
+            return self.dt_explicit, SCHEME_EXPLICIT
+        return self.dt_main, self.scheme_main
+
+
+def time_stepping(scene: Scene) -> TimeStepping:
+    dt_s = solid_dt_limit(scene)
+    scheme = {"none": SCHEME_NONE, "explicit": SCHEME_EXPLICIT, "tpi": SCHEME_TPI}[
+        scene.pressure.scheme]
+    limits = {"dt_solid_eq41": dt_s}
+    if scheme == SCHEME_NONE:
+        dt_main = dt_s
+        dt_exp = dt_s
+    else:
+        dt_l = fluid_dt_limit(scene)
+        limits["dt_fluid_eq42"] = dt_l
+        dt_exp = min(dt_s, dt_l)
+        dt_main = dt_exp if scheme == SCHEME_EXPLICIT else min(dt_s, scene.pressure.R * dt_l)
+    if scene.time.dt is not None:
+        dt_main = scene.time.dt
+    return TimeStepping(dt_main, dt_exp, scheme, scene.pressure.explicit_until, limits)
+
+
+class Simulation:
+    """State, pipeline and clock of one run on this rank."""
+
+    def __init__(self, scene: Scene, slabs):
+        self.scene = scene
+        self.slabs = slabs
+        self.soil = soil_from_scene(scene)
+        self.h = scene.h
+        self.stepping = time_stepping(scene)
+        self.t = 0.0
+        self.step = 0
+
+        data = initial_particles(scene)
+        self.n_global = len(data["key"])
+        mine = slabs.owned_mask(data["x"])
+        self.store = ParticleStore(int(2 * mine.sum()) + 256)
+        self.store.load({k: v[mine] for k, v in data.items()})
+        self.store.u[:] = 0.0
+
+        walls = [(side, b) for side in ("left", "right", "bottom", "top")
+                 if (b := getattr(scene.boundaries, side)).motion != "free"]
+        lo, hi = scene.domain.min, scene.domain.max
+        self.wall_axis = np.array([_SIDE_WALL[s][0] for s, _ in walls], np.int64)
+        self.wall_pos = np.array([(lo, hi)[_SIDE_WALL[s][1]][_SIDE_WALL[s][0]]
+                                  for s, _ in walls], float)
+        self.wall_sign = np.array([_SIDE_WALL[s][2] for s, _ in walls], float)
+        self.wall_fixed = np.array([b.motion == "fixed" for _, b in walls], np.bool_)
+
+        self.cell_size = 2.0 * self.h
+        self.origin = np.array(lo, float) - 4.0 * self.cell_size
+        self.grid_lo = np.zeros(2, np.int64)
+        self.ncell = np.zeros(2, np.int64)
+        self.cell_start = np.zeros(1024, np.int64)
+        self.fill = np.zeros(1024, np.int64)
+        self.cell_of = np.zeros(self.store.cap, np.int64)
+        self.order = np.zeros(self.store.cap, np.int64)
+        self.sums = np.zeros((self.store.cap, NSUMS))
+        self.load_value = np.zeros(max(len(scene.loads), 1))
+
+        g = scene.gravity
+        self.body = (float(g[0]), float(g[1]))
+        self.damping = self.soil.damping_coefficient(scene.stabilisation.damping, self.h)
+        self.coupled = scene.pressure.scheme != "none"
+        self.acc_term = self.coupled and scene.pressure.acceleration_term
+        self.dt, self.scheme = self.stepping.at(0.0)
+        self.bad_particle = -1
+        self.failure = None
+        self.stages = self._assemble()
+
+    # ------------------------------------------------------------------ pipeline
+
+    def _assemble(self) -> list[Stage]:
+        """Only the stages the scene needs, in order."""
+        stages = []
+        if self.slabs.size > 1:
+            stages.append(Stage("exchange", self._exchange))
+        else:
+            stages.append(Stage("reset_halo", self._reset_halo))
+        if len(self.wall_axis):
+            stages.append(Stage("ghosts", self._ghosts))
+        stages.append(Stage("neighbours", self._neighbours))
+        name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
+            (",acceleration_term" if self.acc_term else "") + "]"
+        stages.append(Stage(name, self._interactions))
+        pname = {SCHEME_NONE: "dry", SCHEME_EXPLICIT: "explicit",
+                 SCHEME_TPI: "tpi"}[self.stepping.scheme_main]
+        if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
+            pname = "explicit->tpi"
+        stages.append(Stage(f"update[{pname}]", self._update))
+        return stages
+
+    def _reset_halo(self) -> None:
+        self.store.n_halo = self.store.n_ghost = 0
+
+    def _exchange(self) -> None:
+        self.slabs.exchange(self.store, 2.0 * self.h)
+
+    def _ghosts(self) -> None:
+        st = self.store
+        while True:
+            ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_global),
+                             self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
+                             st.x, st.v, st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho,
+                             st.perm, st.acc, st.key)
+            if ng >= 0:
+                st.n_ghost = ng
+                return
+            st.ensure(2 * st.cap)
+
+    def _neighbours(self) -> None:
+        st = self.store
+        n = st.n_total
+        if self.cell_of.shape[0] < st.cap:
+            self.cell_of = np.zeros(st.cap, np.int64)
+            self.order = np.zeros(st.cap, np.int64)
+            self.sums = np.zeros((st.cap, NSUMS))
+        grid_bounds(st.x, n, self.origin, self.cell_size, self.grid_lo, self.ncell)
+        nc = int(self.ncell[0] * self.ncell[1])
+        if self.cell_start.shape[0] < nc + 1:
+            self.cell_start = np.zeros(2 * nc + 1, np.int64)
+            self.fill = np.zeros(2 * nc + 1, np.int64)
+        bin_particles(st.x, st.key, n, self.origin, self.cell_size, self.grid_lo, self.ncell,
+                      self.cell_of, self.cell_start, self.fill, self.order)
+
+    def _interactions(self) -> None:
+        st = self.store
+        rl = self.soil.rho_l
+        alpha = self.scene.pressure.alpha if self.scheme == SCHEME_TPI else 0.0
+        sb = self.scene.stabilisation
+        pair_sums(st.n_total, st.n_owned, st.x, st.v, st.stress, st.p, st.p_prev, st.poro,
+                  st.vol, st.rho, st.perm, st.acc, self.cell_start, self.order, self.ncell,
+                  self.h, alpha, sb.av_alpha, sb.av_beta, self.soil.sound_speed,
+                  rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
+                  self.sums)
+
+    def _update(self) -> None:
+        st = self.store
+        s = self.soil
+        load_values(self.scene.loads, self.t, self.load_value)
+        bad = advance(st.n_owned, self.sums, st.x, st.u, st.v, st.stress, st.p, st.p_prev,
+                      st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
+                      st.drained_from, self.t, st.load_index, st.traction, self.load_value, self.dt,
+                      s.lam, s.shear, s.K_l, s.gamma_l, s.rho_l, s.rho_s, self.body[0],
+                      self.body[1], self.damping, self.scheme, self.acc_term)
+        if bad >= 0 and self.failure is None:
+            self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank,
+                            "p or v", float(st.p[bad]))
+
+    # ------------------------------------------------------------------ stepping
+
+    def advance_one(self) -> None:
+        self.dt, self.scheme = self.stepping.at(self.t)
+        timer = time.perf_counter
+        for stage in self.stages:
+            t0 = timer()
+            stage.run()
+            stage.seconds += timer() - t0
+            stage.calls += 1
+        self.t += self.dt
+        self.step += 1
+
+    def check_failure(self) -> None:
+        """Collective: all ranks raise NumericalError if any rank saw a non-finite value."""
+        bad = self.failure is not None
+        if self.slabs.any(bad):
+            info = self.slabs.comm.allgather(self.failure)
+            f = min((i for i in info if i is not None), key=lambda i: (i[0], i[3]))
+            raise NumericalError(
+                f"non-finite {f[4]} at step {f[0]}, t = {f[1]:.6g} s, particle id {f[2]} "
+                f"(rank {f[3]}), value {f[5]!r}")

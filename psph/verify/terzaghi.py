@@ -1,0 +1,81 @@
+"""Terzaghi's 1D consolidation with a compressible pore fluid (Section 4.1).
+
+Undrained loading (all sides impervious) builds p0 = q (K_l/n) / (K_l/n + M), M the
+constrained modulus E(1-nu)/((1+nu)(1-2nu)). Once the top is drained at t_d, the excess
+pressure obeys dp/dt = c_v d2p/dz2 with c_v = k / (gamma_l (n/K_l + 1/M)) (mass balance
+Eq. 9 with Eq. 5, quasi-static), p = 0 at the top and no flux at the bottom:
+
+  p(z, t) = p0 sum_m 2/M_m sin(M_m z/H) exp(-M_m^2 T_v),  M_m = (2m+1) pi/2,
+  T_v = c_v (t - t_d) / H^2, z the depth below the top.
+
+Settlement of the top: s = (q H - int_0^H p dz) / M.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Terzaghi:
+    height: float  # H (m), drainage length
+    load: float  # q (Pa)
+    modulus: float  # M, constrained modulus (Pa)
+    porosity: float
+    bulk_water: float  # K_l (Pa)
+    conductivity: float  # k (m/s)
+    gamma_l: float  # rho_l g (N/m^3)
+    t_drain: float  # s
+
+    @property
+    def p0(self) -> float:
+        """Undrained excess pressure after loading (Pa)."""
+        kn = self.bulk_water / self.porosity
+        return self.load * kn / (kn + self.modulus)
+
+    @property
+    def cv(self) -> float:
+        """Consolidation coefficient with the fluid storage n/K_l (m^2/s)."""
+        return self.conductivity / (
+            self.gamma_l * (self.porosity / self.bulk_water + 1.0 / self.modulus))
+
+    def time_of(self, tv: float) -> float:
+        return self.t_drain + tv * self.height**2 / self.cv
+
+    def tv_of(self, t):
+        return np.maximum(np.asarray(t, float) - self.t_drain, 0.0) * self.cv / self.height**2
+
+    def pressure(self, depth, t, terms: int = 400) -> np.ndarray:
+        """Excess pore pressure (Pa) at depth below the drained top, at time t >= t_d."""
+        z = np.asarray(depth, float) / self.height
+        tv = float(self.tv_of(t))
+        if tv <= 0.0:
+            return np.full_like(z, self.p0)
+        m = (2 * np.arange(terms) + 1) * math.pi / 2
+        series = (2 / m) * np.exp(-(m**2) * tv)
+        return self.p0 * np.sin(np.outer(z, m)) @ series
+
+    def settlement(self, t) -> np.ndarray:
+        """Downward displacement of the top (m) for t >= t_d (undrained part included)."""
+        tv = np.atleast_1d(self.tv_of(t))
+        m = (2 * np.arange(400) + 1) * math.pi / 2
+        mean_p = self.p0 * (np.exp(-np.outer(tv, m**2)) @ (2 / m**2))  # (1/H) int p dz
+        return (self.load - mean_p) * self.height / self.modulus
+
+
+def from_scene(scene) -> Terzaghi:
+    """The column of a scene: drained top, load on the top, height = domain height."""
+    m = scene.material
+    E, nu = m.E, m.nu
+    modulus = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    if not scene.loads:
+        raise ValueError("terzaghi reference needs a load on the top")
+    load = scene.loads[0]
+    top = scene.boundaries.top
+    blocks = scene.particles.blocks
+    height = max(b.max[1] for b in blocks) - min(b.min[1] for b in blocks)
+    t_drain = top.drained_from if top.flow == "drained" else math.inf
+    return Terzaghi(height=height, load=load.pressure, modulus=modulus, porosity=m.porosity,
+                    bulk_water=m.K_l, conductivity=m.k, gamma_l=m.rho_l * m.g_ref,
+                    t_drain=t_drain)
