@@ -99,6 +99,8 @@ class Simulation:
         self.wall_sign = np.array([_SIDE_WALL[s][2] for s, _ in walls], float)
         self.wall_fixed = np.array([b.motion == "fixed" for _, b in walls], np.bool_)
 
+        margin = 2.0 * self.h
+        self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
         self.cell_size = 2.0 * self.h
         self.origin = np.array(lo, float) - 4.0 * self.cell_size
         self.grid_lo = np.zeros(2, np.int64)
@@ -194,10 +196,14 @@ class Simulation:
                       st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
                       st.drained_from, self.t, st.load_index, st.traction, self.load_value, self.dt,
                       s.lam, s.shear, s.K_l, s.gamma_l, s.rho_l, s.rho_s, self.body[0],
-                      self.body[1], self.damping, self.scheme, self.acc_term)
+                      self.body[1], self.damping, self.scheme, self.acc_term,
+                      self.scene.stabilisation.corrected_strain_rate, self.box)
         if bad >= 0 and self.failure is None:
-            self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank,
-                            "p or v", float(st.p[bad]))
+            if np.isfinite(st.p[bad]) and np.all(np.isfinite(st.v[bad])):
+                what = f"x (left the domain at {st.x[bad].tolist()})"
+            else:
+                what = f"p or v (p = {st.p[bad]!r}, v = {st.v[bad].tolist()})"
+            self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
 
     # ------------------------------------------------------------------ stepping
 
@@ -219,5 +225,5 @@ class Simulation:
             info = self.slabs.comm.allgather(self.failure)
             f = min((i for i in info if i is not None), key=lambda i: (i[0], i[3]))
             raise NumericalError(
-                f"non-finite {f[4]} at step {f[0]}, t = {f[1]:.6g} s, particle id {f[2]} "
-                f"(rank {f[3]}), value {f[5]!r}")
+                f"step {f[0]}, t = {f[1]:.6g} s, particle id {f[2]} (rank {f[3]}): "
+                f"field {f[4]}")

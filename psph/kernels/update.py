@@ -29,9 +29,10 @@ def _inverse_moment(s):
 @nb.njit(cache=True, error_model="numpy")
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
-            bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, acc_term):
+            bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, acc_term,
+            correct_strain, box):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
-    with a non-finite pressure or velocity, or -1.
+    with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
     lam, shear: Lame constants (Pa); bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3);
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
@@ -43,10 +44,16 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         s = sums[i]
         m00, m01, m10, m11 = _inverse_moment(s)
         # velocity gradient L[a, b] = dv_a/dx_b = Gv[a, n] Minv[n, b]   (Eq. 22)
-        l00 = s[4] * m00 + s[5] * m10
-        l01 = s[4] * m01 + s[5] * m11
-        l10 = s[6] * m00 + s[7] * m10
-        l11 = s[6] * m01 + s[7] * m11
+        if correct_strain:
+            l00 = s[4] * m00 + s[5] * m10
+            l01 = s[4] * m01 + s[5] * m11
+            l10 = s[6] * m00 + s[7] * m10
+            l11 = s[6] * m01 + s[7] * m11
+        else:
+            l00 = s[4]
+            l01 = s[5]
+            l10 = s[6]
+            l11 = s[7]
         div_v = l00 + l11
 
         # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
@@ -111,5 +118,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         u[i, 1] += dt * v[i, 1]
         if bad < 0:
             if not (abs(p[i]) < 1e300 and abs(v[i, 0]) < 1e300 and abs(v[i, 1]) < 1e300):
+                bad = i
+            elif not (box[0] <= x[i, 0] <= box[2] and box[1] <= x[i, 1] <= box[3]):
                 bad = i
     return bad

@@ -1,0 +1,113 @@
+"""Every kind of bad input: exit code 2, one line naming key / value / rule, nothing written."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from psph.scene import builtin_dir
+
+TERZAGHI = (builtin_dir() / "terzaghi.toml").read_text()
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "psph", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=120)
+
+
+CASES = [
+    # (override or text edit, words the message must contain)
+    (["--set", "material.colour=1"], ["unknown key", "material.colour"]),
+    (["--set", "material.E='stiff'"], ["material.E", "'stiff'", "number"]),
+    (["--set", "material.E=-2e7"], ["material.E", "-2", "greater than 0"]),
+    (["--set", "material.K_l=0"], ["material.K_l", "0", "greater than 0"]),
+    (["--set", "material.k=-1e-4"], ["material.k", "greater than 0"]),
+    (["--set", "particles.dx=0"], ["particles.dx", "greater than 0"]),
+    (["--set", "time.dt=-1e-6"], ["time.dt", "greater than 0"]),
+    (["--set", "time.end=0"], ["time.end", "greater than 0"]),
+    (["--set", "material.porosity=1.2"], ["material.porosity", "1.2", "less than 1"]),
+    (["--set", "material.porosity=0"], ["material.porosity", "greater than 0"]),
+    (["--set", "material.nu=0.5"], ["material.nu", "0.5", "less than 0.5"]),
+    (["--set", "material.nu=-1.5"], ["material.nu", "greater than -1"]),
+    (["--set", "particles.blocks.0.max=[0.1, 1.5]"], ["particles.blocks[0].max[1]", "1.5",
+                                                      "outside the walls"]),
+    (["--set", "pressure.alpha=1.5"], ["pressure.alpha", "1.5", "less than or equal to 1"]),
+    (["--set", "pressure.R=0"], ["pressure.R", "greater than 0"]),
+    (["--set", "time.dt=1e-4"], ["time.dt", "0.0001", "solid limit Eq. (41)"]),
+    (["--set", "boundaries.top.motion='sticky'"], ["boundaries.top.motion", "sticky"]),
+]
+
+
+@pytest.mark.parametrize("args,words", CASES, ids=[c[0][1] for c in CASES])
+def test_bad_value_exit_2_one_line_nothing_written(tmp_path, args, words):
+    out = tmp_path / "out"
+    r = run_cli("run", "terzaghi", "--out", str(out), *args)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+
+
+def test_missing_file(tmp_path):
+    out = tmp_path / "out"
+    r = run_cli("run", str(tmp_path / "nope.toml"), "--out", str(out))
+    assert r.returncode == 2
+    assert "nope.toml" in r.stderr and "no such file" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_unreadable_toml(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(TERZAGHI.replace("dx = 0.01", "dx = = 0.01"))
+    out = tmp_path / "out"
+    r = run_cli("run", str(bad), "--out", str(out))
+    assert r.returncode == 2
+    assert "not valid TOML" in r.stderr and "line" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_missing_required_key(tmp_path):
+    f = tmp_path / "s.toml"
+    f.write_text(TERZAGHI.replace("E = 20.0e6\n", ""))
+    r = run_cli("validate", str(f))
+    assert r.returncode == 2 and "material.E" in r.stderr and "required" in r.stderr
+
+
+def test_existing_output_untouched_on_bad_input(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text("keep")
+    r = run_cli("run", "terzaghi", "--out", str(out), "--set", "material.E=0")
+    assert r.returncode == 2
+    assert (out / "summary.json").read_text() == "keep"
+    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
+
+
+def test_validate_prints_resolved_scene():
+    r = run_cli("validate", "terzaghi")
+    assert r.returncode == 0
+    assert "end = " in r.stdout and "h_factor = 1.2" in r.stdout
+
+
+def test_list_names_builtin_scenes():
+    r = run_cli("list")
+    assert r.returncode == 0 and r.stdout.startswith("terzaghi")
+
+
+def test_set_override_reaches_resolved_scene(tmp_path):
+    r = run_cli("validate", "terzaghi", "--set", "material.E=3e7")
+    assert r.returncode == 0 and "E = 30000000.0" in r.stdout
+
+
+def test_resolved_scene_reruns_identically(tmp_path):
+    """OUT/scene.toml is a complete scene: validating it gives the same resolved scene."""
+    first = run_cli("validate", "terzaghi").stdout
+    f = Path(tmp_path) / "resolved.toml"
+    f.write_text(first)
+    assert run_cli("validate", str(f)).stdout == first
