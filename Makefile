@@ -57,6 +57,7 @@ test-mpi: env
 bench: env
 	mpirun -n 1 $(VPY) bench/throughput.py
 	mpirun -n 2 $(VPY) bench/throughput.py
+	$(VPY) bench/throughput.py --plot
 
 lint: env
 	$(VENV)/bin/ruff check psph tests bench

@@ -106,7 +106,7 @@ class Stabilisation(_Model):
     damping: Annotated[float, Field(ge=0.0)] = 0.0  # eta_d of Eq. (44)
     av_alpha: Annotated[float, Field(ge=0.0)] = 0.1  # artificial viscosity in C_ij, Eq. (26)
     av_beta: Annotated[float, Field(ge=0.0)] = 0.1
-    corrected_strain_rate: bool = True  # Eq. (22) correction in the velocity gradient
+    corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
 
 
 class Output(_Model):

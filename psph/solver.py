@@ -6,7 +6,6 @@ progress are scheduled callbacks of the loop; every decision that changes contro
 comes from a collective or from values identical on all ranks (time, step).
 """
 
-import math
 import time
 from dataclasses import dataclass, field
 

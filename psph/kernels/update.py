@@ -44,17 +44,18 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         s = sums[i]
         m00, m01, m10, m11 = _inverse_moment(s)
         # velocity gradient L[a, b] = dv_a/dx_b = Gv[a, n] Minv[n, b]   (Eq. 22)
-        if correct_strain:
-            l00 = s[4] * m00 + s[5] * m10
-            l01 = s[4] * m01 + s[5] * m11
-            l10 = s[6] * m00 + s[7] * m10
-            l11 = s[6] * m01 + s[7] * m11
-        else:
+        l00 = s[4] * m00 + s[5] * m10
+        l01 = s[4] * m01 + s[5] * m11
+        l10 = s[6] * m00 + s[7] * m10
+        l11 = s[6] * m01 + s[7] * m11
+        div_v = l00 + l11
+        if not correct_strain:
+            # strain rate and spin from the plain kernel gradient (Bui et al. 2008): the
+            # corrected one excites a growing zig-zag mode at free surfaces (README)
             l00 = s[4]
             l01 = s[5]
             l10 = s[6]
             l11 = s[7]
-        div_v = l00 + l11
 
         # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
         e01 = 0.5 * (l01 + l10)
@@ -64,7 +65,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         sxy = stress[i, 3]
         stress[i, 0] = sxx + dt * ((lam + 2.0 * shear) * l00 + lam * l11 + 2.0 * w * sxy)
         stress[i, 1] = syy + dt * (lam * l00 + (lam + 2.0 * shear) * l11 - 2.0 * w * sxy)
-        stress[i, 2] += dt * lam * div_v
+        stress[i, 2] += dt * lam * (l00 + l11)
         stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
 
         if scheme != SCHEME_NONE:

@@ -56,10 +56,11 @@ class Terzaghi:
         series = (2 / m) * np.exp(-(m**2) * tv)
         return self.p0 * np.sin(np.outer(z, m)) @ series
 
-    def settlement(self, t) -> np.ndarray:
-        """Downward displacement of the top (m) for t >= t_d (undrained part included)."""
+    def settlement(self, t, terms: int = 4000) -> np.ndarray:
+        """Downward displacement of the top (m) for t >= t_d (undrained part included).
+        The series of the mean pressure converges as 1/terms (relative error ~ 5e-5)."""
         tv = np.atleast_1d(self.tv_of(t))
-        m = (2 * np.arange(400) + 1) * math.pi / 2
+        m = (2 * np.arange(terms) + 1) * math.pi / 2
         mean_p = self.p0 * (np.exp(-np.outer(tv, m**2)) @ (2 / m**2))  # (1/H) int p dz
         return (self.load - mean_p) * self.height / self.modulus
 

@@ -1,0 +1,56 @@
+"""Verification against Terzaghi (Section 4.1): analytical reference, explicit and TPI runs.
+
+CI-sized column: dx = 0.02 m (250 particles) and k = 8e-4 m/s, so that the explicit limit
+Eq. (42) is the full column's (2.83e-7 s) and TPI at dt = 5e-6 s is R = 17.7 as in the paper.
+The full column (dx = 0.01, k = 2e-4) runs with `make run`; its errors are in summary.json.
+"""
+
+import numpy as np
+import pytest
+
+from psph.run import run
+from psph.scene import load_scene
+from psph.solver import time_stepping
+from psph.verify import terzaghi
+
+COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.5]"]
+
+
+def test_reference_limits():
+    ref = terzaghi.Terzaghi(height=1.0, load=1e4, modulus=3e7, porosity=0.4, bulk_water=1e9,
+                            conductivity=2e-4, gamma_l=9810.0, t_drain=0.01)
+    kn = 1e9 / 0.4
+    assert ref.p0 == pytest.approx(1e4 * kn / (kn + 3e7))
+    depth = np.linspace(0.0, 1.0, 11)
+    p_start = ref.pressure(depth[1:], ref.time_of(1e-4))
+    assert np.allclose(p_start[-5:], ref.p0, rtol=1e-6)  # far from the top: undrained
+    assert ref.pressure([0.0], ref.time_of(0.3))[0] == pytest.approx(0.0, abs=1e-9)
+    # settlement: undrained part at t_d, q H / M at the end
+    assert ref.settlement(ref.t_drain)[0] == pytest.approx((1e4 - ref.p0) / 3e7, abs=1e-4 / 3e3)
+    assert ref.settlement(ref.time_of(20.0))[0] == pytest.approx(1e4 / 3e7, rel=1e-9)
+    # infinite K_l: c_v -> k M / gamma_l
+    stiff = terzaghi.Terzaghi(1.0, 1e4, 3e7, 0.4, 1e30, 2e-4, 9810.0, 0.0)
+    assert stiff.cv == pytest.approx(2e-4 * 3e7 / 9810.0)
+
+
+def _check(summary):
+    err = summary["errors"]
+    for tv in ("0.1", "0.2", "0.5"):
+        assert err["pressure"][tv]["max_abs_p_error_over_q"] < 0.03, err["pressure"]
+    assert err["settlement_max_abs_error_over_final"] < 0.05, err
+
+
+@pytest.mark.slow
+def test_tpi_alpha_half_at_R17(tmp_path):
+    scene = load_scene("terzaghi", COARSE)
+    st = time_stepping(scene)
+    R = st.dt_main / st.limits["dt_fluid_eq42"]
+    assert 16 < R < 19
+    _check(run(scene, tmp_path, quiet=True))
+
+
+@pytest.mark.slow
+def test_explicit_at_its_stable_dt(tmp_path):
+    scene = load_scene("terzaghi", COARSE + ["pressure.scheme='explicit'", "time.dt=2.8e-7"])
+    assert scene.time.dt <= time_stepping(scene).limits["dt_fluid_eq42"]
+    _check(run(scene, tmp_path, quiet=True))
