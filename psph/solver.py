@@ -102,6 +102,8 @@ class Simulation:
         self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
         self.cell_size = 2.0 * self.h
         self.origin = np.array(lo, float) - 4.0 * self.cell_size
+        span = np.array(hi, float) - np.array(lo, float)
+        self.cell_max = (np.ceil(span / self.cell_size) + 8).astype(np.int64)
         self.grid_lo = np.zeros(2, np.int64)
         self.ncell = np.zeros(2, np.int64)
         self.cell_start = np.zeros(1024, np.int64)
@@ -168,7 +170,8 @@ class Simulation:
             self.cell_of = np.zeros(st.cap, np.int64)
             self.order = np.zeros(st.cap, np.int64)
             self.sums = np.zeros((st.cap, NSUMS))
-        grid_bounds(st.x, n, self.origin, self.cell_size, self.grid_lo, self.ncell)
+        grid_bounds(st.x, n, self.origin, self.cell_size, self.cell_max, self.grid_lo,
+                    self.ncell)
         nc = int(self.ncell[0] * self.ncell[1])
         if self.cell_start.shape[0] < nc + 1:
             self.cell_start = np.zeros(2 * nc + 1, np.int64)

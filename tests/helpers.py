@@ -20,7 +20,7 @@ def cell_lists(x: np.ndarray, h: float, key=None):
     origin = x.min(axis=0) - 4 * cs
     lo = np.zeros(2, np.int64)
     ncell = np.zeros(2, np.int64)
-    grid_bounds(x, n, origin, cs, lo, ncell)
+    grid_bounds(x, n, origin, cs, np.array([1 << 40, 1 << 40], np.int64), lo, ncell)
     nc = int(ncell.prod())
     cell_start = np.zeros(nc + 1, np.int64)
     fill = np.zeros(nc + 1, np.int64)

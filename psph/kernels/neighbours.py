@@ -11,6 +11,18 @@ import numba as nb
 import numpy as np
 
 
+@nb.njit(cache=True, inline="always")
+def _clamped_cell(c, origin, cell_size, lo, hi):
+    """Cell coordinate of c, clamped to [lo, hi]; NaN goes to lo. Particles outside the
+    domain are flagged by the update (exit 3); clamping keeps the grid bounded meanwhile."""
+    f = (c - origin) / cell_size
+    if not f >= lo:
+        return lo
+    if f >= hi:
+        return hi
+    return int(np.floor(f))
+
+
 @nb.njit(cache=True)
 def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, fill, order):
     """Counting sort of particles 0..n-1 into cells, then insertion sort by key in a cell.
@@ -27,10 +39,8 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
     for c in range(nc + 1):
         cell_start[c] = 0
     for i in range(n):
-        cx = int(np.floor((x[i, 0] - origin[0]) / cell_size)) - lo[0]
-        cy = int(np.floor((x[i, 1] - origin[1]) / cell_size)) - lo[1]
-        if cx < 0 or cy < 0 or cx >= ncx or cy >= ncy:
-            return False
+        cx = _clamped_cell(x[i, 0], origin[0], cell_size, lo[0], lo[0] + ncx - 1) - lo[0]
+        cy = _clamped_cell(x[i, 1], origin[1], cell_size, lo[1], lo[1] + ncy - 1) - lo[1]
         c = cy * ncx + cx
         cell_of[i] = c
         cell_start[c + 1] += 1
@@ -58,9 +68,9 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
 
 
 @nb.njit(cache=True)
-def grid_bounds(x, n, origin, cell_size, lo, ncell):
+def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
     """Lowest cell coordinates `lo` and grid size `ncell` covering particles 0..n-1, with a
-    one-cell margin (written into the two int64 (2,) outputs)."""
+    one-cell margin, cell coordinates limited to [0, cmax] (the domain's grid)."""
     if n == 0:
         lo[0] = 0
         lo[1] = 0
@@ -70,8 +80,8 @@ def grid_bounds(x, n, origin, cell_size, lo, ncell):
     c0min = c1min = 1 << 62
     c0max = c1max = -(1 << 62)
     for i in range(n):
-        c0 = int(np.floor((x[i, 0] - origin[0]) / cell_size))
-        c1 = int(np.floor((x[i, 1] - origin[1]) / cell_size))
+        c0 = _clamped_cell(x[i, 0], origin[0], cell_size, 1, cmax[0] - 1)
+        c1 = _clamped_cell(x[i, 1], origin[1], cell_size, 1, cmax[1] - 1)
         c0min = min(c0min, c0)
         c0max = max(c0max, c0)
         c1min = min(c1min, c1)
