@@ -13,6 +13,7 @@ import json
 import platform
 import sys
 import time
+import tomllib
 from datetime import date
 from pathlib import Path
 
@@ -76,8 +77,6 @@ def main() -> None:
     ranks = comm.Get_size()
     rows = []
     for side_w, side_h, steps in ((1.0, 2.0, 60), (2.0, 5.0, 15)):
-        import tomllib
-
         text = BLOCK.format(n=int(side_w * side_h * 1e4), w=side_w, hgt=side_h)
         scene = resolve(validate(tomllib.loads(text)))
         sim = Simulation(scene, make_slabs(scene, comm))

@@ -26,7 +26,7 @@ def cell_lists(x: np.ndarray, h: float, key=None):
     fill = np.zeros(nc + 1, np.int64)
     cell_of = np.zeros(n, np.int64)
     order = np.zeros(n, np.int64)
-    assert bin_particles(x, key, n, origin, cs, lo, ncell, cell_of, cell_start, fill, order)
+    bin_particles(x, key, n, origin, cs, lo, ncell, cell_of, cell_start, fill, order)
     return cell_start, order, ncell
 
 

@@ -31,7 +31,8 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
     lo: (2,) int64 lowest local cell coordinates; ncell: (2,) int64 local grid size.
     Outputs (preallocated): cell_of (cap,), cell_start (>= ncx*ncy + 1,), fill (>= ncx*ncy,)
     scratch, order (cap,).
-    Returns False if a particle falls outside the local grid.
+    Particles outside the local grid (only possible after one left the domain, which the
+    update reports as a failure) are clamped into its edge cells.
     """
     ncx = ncell[0]
     ncy = ncell[1]
@@ -64,7 +65,6 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
                 order[b + 1] = order[b]
                 b -= 1
             order[b + 1] = p
-    return True
 
 
 @nb.njit(cache=True)
