@@ -90,6 +90,7 @@ class Pressure(_Model):
     scheme: Literal["tpi", "explicit", "none"] = "tpi"
     alpha: Annotated[float, Field(ge=0.0, le=1.0)] = 0.5
     R: Pos = 17.0  # TPI amplifier of the fluid time step, Eq. (40)
+    beta: Annotated[float, Field(ge=0.0)] = 0.0  # Eq. (47) for p < 0 (paper: 0.04); 0: off
     explicit_until: Annotated[float, Field(ge=0.0)] = 0.0  # s: explicit Eq. (25) before this
     acceleration_term: bool = False  # div(k dv/dt)/g of Eq. (25)/(36); see README
 
@@ -107,6 +108,7 @@ class Stabilisation(_Model):
     av_alpha: Annotated[float, Field(ge=0.0)] = 0.1  # artificial viscosity in C_ij, Eq. (26)
     av_beta: Annotated[float, Field(ge=0.0)] = 0.1
     corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
+    shepard_every: Annotated[int, Field(ge=0)] = 0  # m of Eq. (46): filter p every m steps
 
 
 class Output(_Model):

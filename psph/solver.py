@@ -15,6 +15,7 @@ from psph.errors import NumericalError
 from psph.kernels.ghosts import make_ghosts
 from psph.kernels.interactions import NSUMS, pair_sums
 from psph.kernels.neighbours import bin_particles, grid_bounds
+from psph.kernels.shepard import shepard_pressure
 from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance
 from psph.particles import ParticleStore
 from psph.physics.initial import initial_particles
@@ -32,6 +33,7 @@ class Stage:
 
     name: str
     run: callable
+    every: int = 1  # run on steps that are multiples of this
     seconds: float = 0.0
     calls: int = 0
 
@@ -111,6 +113,7 @@ class Simulation:
         self.cell_of = np.zeros(self.store.cap, np.int64)
         self.order = np.zeros(self.store.cap, np.int64)
         self.sums = np.zeros((self.store.cap, NSUMS))
+        self.scratch = np.zeros((2, self.store.cap))
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
@@ -135,6 +138,9 @@ class Simulation:
         if len(self.wall_axis):
             stages.append(Stage("ghosts", self._ghosts))
         stages.append(Stage("neighbours", self._neighbours))
+        m = self.scene.stabilisation.shepard_every
+        if self.coupled and m > 0:
+            stages.append(Stage(f"shepard[every {m}]", self._shepard, every=m))
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
         stages.append(Stage(name, self._interactions))
@@ -179,6 +185,21 @@ class Simulation:
         bin_particles(st.x, st.key, n, self.origin, self.cell_size, self.grid_lo, self.ncell,
                       self.cell_of, self.cell_start, self.fill, self.order)
 
+    def _shepard(self) -> None:
+        """Eq. (46) on owned particles, then the halo and ghosts again so that every copy
+        of a particle carries its filtered pressure (positions have not moved yet)."""
+        st = self.store
+        if self.scratch.shape[1] < st.cap:
+            self.scratch = np.zeros((2, st.cap))
+        shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.vol, st.drained_from, self.t,
+                         self.cell_start, self.order, self.ncell, self.h, self.scratch[0],
+                         self.scratch[1])
+        for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
+            stage.run()
+
+    def _stage(self, name: str) -> Stage:
+        return next(s for s in self.stages if s.name == name)
+
     def _interactions(self) -> None:
         st = self.store
         rl = self.soil.rho_l
@@ -198,7 +219,8 @@ class Simulation:
                       st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
                       st.drained_from, self.t, st.load_index, st.traction, self.load_value, self.dt,
                       s.lam, s.shear, s.K_l, s.gamma_l, s.rho_l, s.rho_s, self.body[0],
-                      self.body[1], self.damping, self.scheme, self.acc_term,
+                      self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
+                      self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box)
         if bad >= 0 and self.failure is None:
             if np.isfinite(st.p[bad]) and np.all(np.isfinite(st.v[bad])):
@@ -213,6 +235,8 @@ class Simulation:
         self.dt, self.scheme = self.stepping.at(self.t)
         timer = time.perf_counter
         for stage in self.stages:
+            if self.step % stage.every:
+                continue
             t0 = timer()
             stage.run()
             stage.seconds += timer() - t0

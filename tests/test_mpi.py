@@ -113,3 +113,15 @@ def test_falling_block_migrates_bitwise(tmp_path_factory):
         crossed = int(np.sum((y0 > cut) & (y < cut)))
     # the block fell onto the floor: particles migrated from the upper to the lower rank
     assert comm.bcast(crossed, root=0) >= 10
+
+
+@pytest.mark.mpi(min_size=2)
+def test_shepard_and_eq47_column_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """The Shepard pass re-sends the halo, so filtered pressures match across the cut."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    out = _shared_tmp(comm, tmp_path_factory)
+    scene = load_scene("terzaghi", COLUMN + ["stabilisation.shepard_every=7",
+                                             "pressure.beta=0.04"])
+    _one_vs_two(comm, scene, out)

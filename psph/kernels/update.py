@@ -26,17 +26,29 @@ def _inverse_moment(s):
     return s[3] * inv, -s[1] * inv, -s[2] * inv, s[0] * inv
 
 
+@nb.njit(cache=True, inline="always")
+def tpi_pressure(b_i, sum_a, sum_ap, p_i, p_prev_i, alpha, beta, dt):
+    """p_i^(t+1) of the TPI update: Eq. (38) with p~_j = p_j + alpha (p_j - p_j^prev) of
+    Eq. (39) already summed in sum_ap = sum_j A_ij p~_j; where p_i^t < 0 and beta > 0, the
+    stabilised negative branch of Eq. (47) adds beta / dt to both sides."""
+    if beta > 0.0 and p_i < 0.0:
+        p_tilde = p_i + alpha * (p_i - p_prev_i)
+        return (b_i + sum_ap + beta * p_tilde / dt) / (sum_a + beta / dt)
+    return (b_i + sum_ap) / sum_a
+
+
 @nb.njit(cache=True, error_model="numpy")
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
-            bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, acc_term,
-            correct_strain, box):
+            bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, alpha, beta,
+            acc_term, correct_strain, box):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
     lam, shear: Lame constants (Pa); bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3);
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
-    1 explicit Eq. (25), 2 TPI Eq. (38); p = 0 is imposed where drained_from <= t.
+    1 explicit Eq. (25), 2 TPI Eq. (38), with Eq. (47) for p < 0 when beta > 0 (alpha,
+    beta: Eq. 39 and 47); p = 0 is imposed where drained_from <= t.
     """
     bad = -1
     inv_g = rho_l / gamma_l
@@ -93,7 +105,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
             elif s[16] > 0.0:
                 # TPI, Eq. (38) with B of Eq. (36); s[17] holds sum A_ij p_j^(t+alpha)
                 b_i = -gamma_l * div_v + head + rho_l * div_ka - e_i
-                p_new = (b_i + s[17]) / s[16]
+                p_new = tpi_pressure(b_i, s[16], s[17], p[i], p_prev[i], alpha, beta, dt)
                 p_prev[i] = p[i]
                 p[i] = p_new
             n_new = poro[i] + dt * dn

@@ -1,0 +1,64 @@
+"""Shepard filter of the pore pressure, Eq. (46).
+
+p_i <- sum_j V_j W_ij p_j / sum_j V_j W_ij over the neighbours j within 2h (i included).
+Zeroth-order (constant-preserving) smoothing of the pressure noise; Section 3.5.2 applies
+it every m = 20-40 steps. Neighbours include halo rows and wall ghosts (which carry the
+mirrored pressure), so a wall behaves as a symmetry plane.
+"""
+
+import math
+
+import numba as nb
+
+from psph.kernels.spline import w_cubic
+
+
+@nb.njit(cache=True)
+def shepard_pressure(n_total, n_owned, x, p, vol, drained_from, t, cell_start, order, ncell,
+                     h, num, den):
+    """Filter p of particles 0..n_owned-1 in place (Eq. 46). Particles with an imposed
+    pressure (drained_from <= t) keep it. num, den: scratch arrays of length >= n_owned."""
+    w0 = w_cubic(0.0, h)
+    for i in range(n_owned):
+        num[i] = vol[i] * w0 * p[i]
+        den[i] = vol[i] * w0
+    ncx = ncell[0]
+    ncy = ncell[1]
+    support2 = 4.0 * h * h
+    for cy in range(ncy):
+        for cx in range(ncx):
+            c = cy * ncx + cx
+            for sa in range(cell_start[c], cell_start[c + 1]):
+                a = order[sa]
+                for k in range(5):  # half stencil, as in interactions.pair_sums
+                    if k == 0:
+                        nc = c
+                        s0 = sa + 1
+                    else:
+                        ox = (1, -1, 0, 1)[k - 1]
+                        oy = (0, 1, 1, 1)[k - 1]
+                        nx = cx + ox
+                        ny = cy + oy
+                        if nx < 0 or nx >= ncx or ny >= ncy:
+                            continue
+                        nc = ny * ncx + nx
+                        s0 = cell_start[nc]
+                    for sb in range(s0, cell_start[nc + 1]):
+                        b = order[sb]
+                        if a >= n_owned and b >= n_owned:
+                            continue
+                        d0 = x[b, 0] - x[a, 0]
+                        d1 = x[b, 1] - x[a, 1]
+                        r2 = d0 * d0 + d1 * d1
+                        if r2 >= support2:
+                            continue
+                        w = w_cubic(math.sqrt(r2), h)
+                        if a < n_owned:
+                            num[a] += vol[b] * w * p[b]
+                            den[a] += vol[b] * w
+                        if b < n_owned:
+                            num[b] += vol[a] * w * p[a]
+                            den[b] += vol[a] * w
+    for i in range(n_owned):
+        if drained_from[i] > t and den[i] > 0.0:
+            p[i] = num[i] / den[i]
