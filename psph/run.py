@@ -63,6 +63,7 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
     monitor = TerzaghiMonitor(scene, slabs) if scene.verification.reference == "terzaghi" \
         else None
     history = []
+    probes = probe_ids(scene)
     pending = snapshot_times(scene)
     end = scene.time.end
     next_hist = 0.0
@@ -80,7 +81,7 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
             write_xdmf(out / "particles.xdmf", "particles.h5", writer.entries, scene.dim)
 
     def diagnostics():
-        row = _history_row(sim)
+        row = _history_row(sim, probes)
         if monitor is not None:
             monitor.history(sim, row)
         if rank0:
@@ -115,25 +116,57 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
 
     loop_seconds = time.perf_counter() - loop0
     summary = _summary(sim, slabs, setup_seconds, loop_seconds, monitor)
+    verification = None
+    if rank0 and history:
+        from psph.verify import history_errors
+
+        cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
+        x0 = initial_particles(scene)["x"] if probes else None
+        verification = history_errors(scene, cols, {k: tuple(x0[i]) for k, i in probes.items()})
+    verification = comm.bcast(verification, root=0)
+    if verification is not None:
+        summary["errors"] = verification
     if rank0:
         _write_history(out / "history.csv", history)
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
 
 
-def _history_row(sim: Simulation) -> dict:
+def probe_ids(scene: Scene) -> dict[str, int]:
+    """Global id of the particle nearest to each `output.probes` point (initial positions)."""
+    if not scene.output.probes:
+        return {}
+    x = initial_particles(scene)["x"]
+    return {name: int(np.argmin(np.sum((x - np.asarray(pt)) ** 2, axis=1)))
+            for name, pt in scene.output.probes.items()}
+
+
+def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
+    """One diagnostics row (collective): surface settlement, kinetic energy, max p, and p
+    and displacement of each probe particle (its owner contributes, the others add 0)."""
     st = sim.store
     n = st.n_owned
     surf = st.surface[:n] > 0
-    local = np.array([
-        -st.u[:n, 1][surf].sum(), float(surf.sum()),
-        0.5 * np.sum(st.rho[:n] * st.vol[:n] * np.sum(st.v[:n] ** 2, axis=1)),
-    ])
+    local = np.zeros(3 + 3 * len(probes))
+    local[0] = -st.u[:n, 1][surf].sum()
+    local[1] = float(surf.sum())
+    local[2] = 0.5 * np.sum(st.rho[:n] * st.vol[:n] * np.sum(st.v[:n] ** 2, axis=1))
+    keys = st.key[:n]
+    for k, pid in enumerate(probes.values()):
+        hit = np.flatnonzero(keys == pid)
+        if len(hit):
+            i = hit[0]
+            local[3 + 3 * k:6 + 3 * k] = (st.p[i], st.u[i, 0], st.u[i, 1])
     tot = sim.slabs.allreduce_sum(local)
     pmax = sim.slabs.allreduce_max(float(np.max(st.p[:n])) if n else -math.inf)
-    return {"time": sim.t, "step": sim.step,
-            "settlement": tot[0] / tot[1] if tot[1] > 0 else 0.0,
-            "kinetic_energy": tot[2], "p_max": pmax}
+    row = {"time": sim.t, "step": sim.step,
+           "settlement": tot[0] / tot[1] if tot[1] > 0 else 0.0,
+           "kinetic_energy": tot[2], "p_max": pmax}
+    for k, name in enumerate(probes):
+        row[f"p_{name}"] = tot[3 + 3 * k]
+        row[f"ux_{name}"] = tot[4 + 3 * k]
+        row[f"uy_{name}"] = tot[5 + 3 * k]
+    return row
 
 
 def _write_history(path: Path, rows: list[dict]) -> None:

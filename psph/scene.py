@@ -115,10 +115,12 @@ class Output(_Model):
     times: list[Annotated[float, Field(ge=0.0)]] = []  # s
     interval: Annotated[float, Field(ge=0.0)] = 0.0  # s; 0: only `times` and the end
     history_interval: Pos = 1.0e-3  # s between diagnostics rows (settlement, energy)
+    # points (m) whose nearest particle's p and u go into history.csv as p_<name>, ...
+    probes: dict[str, Vec2] = {}
 
 
 class Verification(_Model):
-    reference: Literal["none", "terzaghi"] = "none"
+    reference: Literal["none", "terzaghi", "harmonic", "strip_footing"] = "none"
     tv: list[Pos] = []  # time factors T_v at which to snapshot and compare
 
 

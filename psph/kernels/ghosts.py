@@ -3,7 +3,8 @@
 A wall is a plane x[axis] = pos with the soil on the side `sign` (+1: soil at larger x).
 Ghosts mirror the real particles (owned and halo) within `reach` (= 2h) of a wall: position
 mirrored; velocity and acceleration with the normal component reversed (free slip) or both
-reversed (fixed, no slip); effective stress mirrored (shear component reversed); pressure,
+reversed (fixed, no slip); effective stress mirrored (shear component reversed on a
+free-slip wall, kept on a fixed one so that the wall resists tangential motion); pressure,
 porosity, volume, density and permeability copied, so a wall is impermeable. Particles near
 two walls of different axes also get a corner ghost mirrored across both.
 """
@@ -27,7 +28,9 @@ def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho,
     stress[dst, 0] = stress[src, 0]
     stress[dst, 1] = stress[src, 1]
     stress[dst, 2] = stress[src, 2]
-    stress[dst, 3] = -stress[src, 3]
+    # free slip: shear reversed, so a real-ghost pair carries no shear traction; fixed:
+    # shear kept, so the wall's shear reaction resists sliding along it
+    stress[dst, 3] = stress[src, 3] if fixed else -stress[src, 3]
     p[dst] = p[src]
     p_prev[dst] = p_prev[src]
     poro[dst] = poro[src]

@@ -1,0 +1,145 @@
+"""Run time against error on Terzaghi (Section 4.1): explicit Eq. (25) vs TPI Eq. (38).
+
+Every case is the `terzaghi` scene on one rank, run to T_v = 0.5. The explicit scheme runs
+at its stable dt (Eq. 42); TPI sweeps dt (R = dt / dt_Eq42) and alpha, with its impervious
+loading stage explicit (as in the paper). Per case: wall time of the run and the error
+against the analytical solution: max |p - p_a| / q over T_v = 0.1, 0.2, 0.5, and the max
+settlement error / final settlement over T_v in [0.1, 0.5].
+
+    .venv/bin/python bench/time_vs_error.py            # the paper's column (~25 min)
+    .venv/bin/python bench/time_vs_error.py --quick    # dx = 0.02, k = 8e-4 column (~3 min)
+
+Prints a table, writes bench/out/time_vs_error[-quick].json and draws
+bench/out/time_vs_error[-quick].png (error against wall time, the Pareto picture).
+"""
+
+import argparse
+import json
+import platform
+import tempfile
+from datetime import date
+from pathlib import Path
+
+OUT = Path(__file__).parent / "out"
+BASE = ["verification.tv=[0.1, 0.2, 0.5]", "output.interval=0.0", "output.times=[]"]
+QUICK = ["particles.dx=0.02", "material.k=8e-4"]
+BAR = 0.03  # error bar of the headline: TPI speed-up at <= 3 % error
+
+
+def cases() -> list[tuple[str, list[str]]]:
+    """(label, --set overrides); dt chosen as multiples of the column's Eq. (42) limit."""
+    out = [("explicit", ["pressure.scheme='explicit'"])]
+    for dt in (2.5e-6, 5e-6, 1e-5):
+        for alpha in (0.0, 0.5, 0.7):
+            out.append((f"tpi dt={dt:g} alpha={alpha:g}",
+                        [f"time.dt={dt}", f"pressure.alpha={alpha}"]))
+    return out
+
+
+def run_case(overrides: list[str]) -> dict:
+    from mpi4py import MPI
+
+    from psph.errors import NumericalError
+    from psph.run import run
+    from psph.scene import load_scene
+    from psph.solver import time_stepping
+
+    scene = load_scene("terzaghi", overrides)
+    st = time_stepping(scene)
+    rec = {"dt": st.dt_main, "R": st.dt_main / st.limits["dt_fluid_eq42"],
+           "scheme": scene.pressure.scheme, "alpha": scene.pressure.alpha}
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            s = run(scene, Path(tmp), comm=MPI.COMM_SELF, quiet=True)
+        except NumericalError as e:
+            return rec | {"stable": False, "failure": str(e)}
+    err = s["errors"]
+    return rec | {"stable": True, "wall_s": s["wall_time_s"], "steps": s["steps"],
+                  "p_error": err["max_abs_p_error_over_q"],
+                  "p_error_by_tv": {k: v["max_abs_p_error_over_q"]
+                                    for k, v in err["pressure"].items()},
+                  "settlement_error": err["settlement_max_abs_error_over_final"]}
+
+
+def headline(rows: list[dict]) -> dict:
+    exp = next(r for r in rows if r["scheme"] == "explicit")
+    ok = [r for r in rows if r["scheme"] == "tpi" and r["stable"] and r["p_error"] <= BAR
+          and r["settlement_error"] <= BAR]
+    if not ok or not exp["stable"]:
+        return {}
+    best = min(ok, key=lambda r: r["wall_s"])
+    return {"explicit_wall_s": exp["wall_s"], "explicit_p_error": exp["p_error"],
+            "best_tpi": best["label"], "best_tpi_wall_s": best["wall_s"],
+            "best_tpi_p_error": best["p_error"],
+            "speedup_at_3pct": exp["wall_s"] / best["wall_s"]}
+
+
+def plot(data: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    marks = {0.0: "v", 0.5: "o", 0.7: "s"}
+    for r in data["cases"]:
+        if not r["stable"]:
+            continue
+        if r["scheme"] == "explicit":
+            ax.plot(r["wall_s"], 100 * r["p_error"], "k*", ms=14, label="explicit Eq. (25)")
+            continue
+        ax.plot(r["wall_s"], 100 * r["p_error"], marks[r["alpha"]], ms=8,
+                color=plt.cm.viridis(min(r["R"] / 40, 1)),
+                label=f"TPI R={r['R']:.0f} alpha={r['alpha']:g}")
+    ax.axhline(100 * BAR, color="grey", ls="--", lw=1)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time (s, 1 rank)")
+    ax.set_ylabel("max |p - p_a| / q over T_v = 0.1, 0.2, 0.5 (%)")
+    h = data.get("headline", {})
+    title = f"Terzaghi ({data['column']}), {data['date']}"
+    if h:
+        title += f": TPI {h['speedup_at_3pct']:.1f}x faster at <= 3 %"
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="coarse CI-sized column")
+    ap.add_argument("--plot-only", action="store_true", help="redraw the PNG from the JSON")
+    args = ap.parse_args()
+    tag = "-quick" if args.quick else ""
+    OUT.mkdir(parents=True, exist_ok=True)
+    jpath, ppath = OUT / f"time_vs_error{tag}.json", OUT / f"time_vs_error{tag}.png"
+    if args.plot_only:
+        plot(json.loads(jpath.read_text()), ppath)
+        return
+    rows = []
+    print(f"{'case':<28} {'R':>6} {'steps':>9} {'wall s':>8} {'p err/q':>8} {'settl.':>8}")
+    for label, ov in cases():
+        r = {"label": label} | run_case(BASE + (QUICK if args.quick else []) + ov)
+        rows.append(r)
+        if r["stable"]:
+            print(f"{label:<28} {r['R']:6.1f} {r['steps']:9d} {r['wall_s']:8.1f} "
+                  f"{r['p_error']:8.4f} {r['settlement_error']:8.4f}", flush=True)
+        else:
+            print(f"{label:<28} {r['R']:6.1f}  unstable: {r['failure']}", flush=True)
+    data = {"date": date.today().isoformat(), "machine": platform.node(),
+            "cpu": platform.processor() or platform.machine(),
+            "column": "dx=0.02, k=8e-4" if args.quick else "dx=0.01, k=2e-4 (paper)",
+            "cases": rows, "headline": headline(rows)}
+    jpath.write_text(json.dumps(data, indent=2) + "\n")
+    plot(data, ppath)
+    h = data["headline"]
+    if h:
+        print(f"TPI at <= 3 % error ({h['best_tpi']}, {h['best_tpi_p_error']:.4f}) is "
+              f"{h['speedup_at_3pct']:.1f}x faster than explicit ({h['explicit_p_error']:.4f})")
+    print(f"wrote {jpath} and {ppath}")
+
+
+if __name__ == "__main__":
+    main()
