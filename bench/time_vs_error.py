@@ -26,9 +26,12 @@ QUICK = ["particles.dx=0.02", "material.k=8e-4"]
 BAR = 0.03  # error bar of the headline: TPI speed-up at <= 3 % error
 
 
-def cases() -> list[tuple[str, list[str]]]:
-    """(label, --set overrides); dt chosen as multiples of the column's Eq. (42) limit."""
-    out = [("explicit", ["pressure.scheme='explicit'"])]
+def cases(base: list[str]) -> list[tuple[str, list[str]]]:
+    """(label, --set overrides): explicit at the Eq. (42) limit, TPI over dt and alpha."""
+    from psph.scene import fluid_dt_limit, load_scene
+
+    dt_l = fluid_dt_limit(load_scene("terzaghi", base))
+    out = [("explicit", ["pressure.scheme='explicit'", f"time.dt={dt_l!r}"])]
     for dt in (2.5e-6, 5e-6, 1e-5):
         for alpha in (0.0, 0.5, 0.7):
             out.append((f"tpi dt={dt:g} alpha={alpha:g}",
@@ -120,8 +123,9 @@ def main() -> None:
         return
     rows = []
     print(f"{'case':<28} {'R':>6} {'steps':>9} {'wall s':>8} {'p err/q':>8} {'settl.':>8}")
-    for label, ov in cases():
-        r = {"label": label} | run_case(BASE + (QUICK if args.quick else []) + ov)
+    base = BASE + (QUICK if args.quick else [])
+    for label, ov in cases(base):
+        r = {"label": label} | run_case(base + ov)
         rows.append(r)
         if r["stable"]:
             print(f"{label:<28} {r['R']:6.1f} {r['steps']:9d} {r['wall_s']:8.1f} "

@@ -79,6 +79,7 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
             monitor.snapshot(sim)
         if rank0:
             write_xdmf(out / "particles.xdmf", "particles.h5", writer.entries, scene.dim)
+            _write_history(out / "history.csv", history)  # readable if the run stops
 
     def diagnostics():
         row = _history_row(sim, probes)
