@@ -6,6 +6,7 @@ surface settlement against time beside the analytical settlement.
 """
 
 import csv
+import json
 import tomllib
 from pathlib import Path
 
@@ -29,9 +30,112 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
     scene = validate(tomllib.loads((out / "scene.toml").read_text()), str(out / "scene.toml"))
     snaps = read_snapshots(h5)
     paths = [_field_picture(out, snaps[-1], field)]
-    if scene.verification.reference == "terzaghi":
+    ref = scene.verification.reference
+    if ref == "terzaghi":
         paths.append(_terzaghi_picture(out, scene, snaps))
+    elif ref == "harmonic":
+        paths.append(_harmonic_picture(out, scene, snaps))
+    elif ref == "strip_footing":
+        paths.append(_strip_picture(out, scene, snaps))
     return paths
+
+
+def _history(out: Path) -> dict[str, np.ndarray]:
+    rows = list(csv.DictReader((out / "history.csv").open()))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def _verification(out: Path, scene, hist) -> dict:
+    """The probe comparison of psph.verify, also written to OUT/verification.json."""
+    from psph.physics.initial import initial_particles
+    from psph.run import probe_ids
+    from psph.verify import history_errors
+
+    x0 = initial_particles(scene)["x"]
+    probes = {k: tuple(x0[i]) for k, i in probe_ids(scene).items()}
+    errors = history_errors(scene, hist, probes)
+    (out / "verification.json").write_text(json.dumps(errors, indent=2) + "\n")
+    return errors
+
+
+def _harmonic_picture(out: Path, scene, snaps: list[dict]) -> Path:
+    from psph.verify.harmonic import from_scene
+
+    hist = _history(out)
+    err = _verification(out, scene, hist)
+    top = max(b.max[1] for b in scene.particles.blocks)
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5), width_ratios=[1.6, 1])
+    t = hist["time"]
+    names = list(err["probes"])
+    colours = plt.cm.viridis(np.linspace(0, 0.85, len(names)))
+    depths = [err["probes"][k]["depth_m"] for k in names]
+    damped = from_scene(scene, True)
+    tr, pr = damped.pressure_at(depths, float(t[-1]), 2.5e-4)
+    _, pu = from_scene(scene, False).pressure_at(depths, float(t[-1]), 2.5e-4)
+    for j, (name, col) in enumerate(zip(names, colours, strict=True)):
+        ax1.plot(t, hist[f"p_{name}"] / 1e3, ".", ms=2.5, color=col)
+        ax1.plot(tr, pr[:, j] / 1e3, "-", color=col, lw=1.2, label=f"z = {depths[j]:.2f} m")
+        ax1.plot(tr, pu[:, j] / 1e3, ":", color=col, lw=1)
+    ax1.set_xlabel("time (s)")
+    ax1.set_ylabel("excess pore pressure (kPa)")
+    ax1.set_title("SPH (dots); 1D u-p_l reference with the same damping (lines), "
+                  "undamped (dotted)", fontsize=9)
+    ax1.legend(fontsize=8)
+    tg, zc, _, ug = damped.solve(float(t[-1]), 2.5e-4)
+    zn = np.linspace(0.0, damped.height, ug.shape[1])
+    for t_show, col in ((0.135, "tab:blue"), (0.155, "tab:red")):
+        snap = min(snaps, key=lambda s, t_show=t_show: abs(s["time"] - t_show))
+        depth = top - (snap["x"][:, 1] - snap["u"][:, 1])
+        ax2.plot(-snap["u"][:, 1] * 1e3, depth, ".", ms=2, color=col)
+        k = int(np.argmin(np.abs(tg - snap["time"])))
+        ax2.plot(ug[k] * 1e3, zn, "-", color=col, label=f"t = {snap['time']:.3f} s")
+    ax2.invert_yaxis()
+    ax2.set_xlabel("settlement (mm)")
+    ax2.set_ylabel("depth (m)")
+    ax2.set_title("settlement profile (paper Fig. 8)", fontsize=9)
+    ax2.legend(fontsize=8)
+    fig.suptitle(f"{scene.name}: 1D harmonic consolidation, load 3(1 - cos 75t) kPa")
+    path = out / "harmonic.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _strip_picture(out: Path, scene, snaps: list[dict]) -> Path:
+    hist = _history(out)
+    err = _verification(out, scene, hist)
+    t = hist["time"]
+    fig, (ax1, ax2, ax3) = plt.subplots(1, 3, figsize=(16, 4.8))
+    for name, col in zip(err["probes"], ("tab:blue", "tab:red"), strict=False):
+        e = err["probes"][name]
+        ax1.plot(t, hist[f"p_{name}"] / 1e3, "-", color=col,
+                 label=f"{name}: x = {e['x_m']:.2f} m, depth {e['depth_m']:.2f} m")
+        ax1.plot([err["t_load_end_s"]], [e["undrained_reference_Pa"] / 1e3], "o", mfc="none",
+                 color=col, ms=9)
+        ax2.plot(t, -hist[f"uy_{name}"] * 1e3, "-", color=col, label=name)
+    ax1.set_xscale("symlog", linthresh=0.1)
+    ax1.set_xlabel("time (s)")
+    ax1.set_ylabel("excess pore pressure (kPa)")
+    ax1.set_title("p at A and B (circles: undrained elastic q alpha / pi)", fontsize=9)
+    ax1.legend(fontsize=8)
+    ax2.set_xscale("symlog", linthresh=0.1)
+    ax2.set_xlabel("time (s)")
+    ax2.set_ylabel("settlement (mm)")
+    ax2.set_title("settlement at A and B (paper Fig. 12a)", fontsize=9)
+    ax2.legend(fontsize=8)
+    snap = min(snaps, key=lambda s: abs(s["time"] - err["t_load_end_s"]))
+    sc = ax3.scatter(snap["x"][:, 0], snap["x"][:, 1], c=snap["p"] / 1e3, s=2, cmap="viridis")
+    fig.colorbar(sc, ax=ax3, label="p (kPa)")
+    ax3.set_aspect("equal")
+    ax3.set_title(f"p at t = {snap['time']:.3g} s (end of loading)", fontsize=9)
+    fig.suptitle(f"{scene.name}: flexible strip footing, q = {err['load_Pa'] / 1e3:g} kPa, "
+                 f"half-width {err['load_half_width_m']:g} m (symmetry plane at x = 0)")
+    path = out / "strip_footing.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def _field_picture(out: Path, snap: dict, field: str) -> Path:
@@ -58,7 +162,7 @@ def _field_picture(out: Path, snap: dict, field: str) -> Path:
 def _terzaghi_picture(out: Path, scene, snaps: list[dict]) -> Path:
     ref = terzaghi.from_scene(scene)
     top = max(b.max[1] for b in scene.particles.blocks)
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.8))
+    fig, (ax1, ax2, ax4) = plt.subplots(1, 3, figsize=(16, 4.8))
     zz = np.linspace(0, ref.height, 200)
     colours = plt.cm.viridis(np.linspace(0, 0.9, max(len(scene.verification.tv), 1)))
     for tv, col in zip(scene.verification.tv, colours, strict=False):
@@ -84,6 +188,20 @@ def _terzaghi_picture(out: Path, scene, snaps: list[dict]) -> Path:
     ax2.set_ylabel("surface settlement (mm)")
     ax2.set_title("surface settlement")
     ax2.legend()
+    hist = _history(out)
+    probes = [k[2:] for k in hist if k.startswith("p_") and k != "p_max"]
+    window = t <= 5 * ref.t_drain
+    for name in probes:
+        ax4.plot(t[window], hist[f"p_{name}"][window] / ref.load, ".-", ms=3, lw=0.8,
+                 label=f"probe {name}")
+    ax4.plot(t[window], hist["p_max"][window] / ref.load, "-", color="grey", lw=0.8,
+             label="max over particles")
+    ax4.axvline(ref.t_drain, color="k", ls=":", lw=1)
+    ax4.axhline(ref.p0 / ref.load, color="k", ls="--", lw=0.8, label="undrained p0")
+    ax4.set_xlabel("time (s)")
+    ax4.set_ylabel("p / q")
+    ax4.set_title("pressure history around the drained switch (dotted)", fontsize=9)
+    ax4.legend(fontsize=8)
     fig.suptitle(f"{scene.name}: Terzaghi consolidation (q = {ref.load:g} Pa)")
     path = out / "terzaghi.png"
     fig.tight_layout()
