@@ -22,7 +22,8 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
-.PHONY: env run test test-serial test-mpi bench lint clean-env
+.PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability lint \
+	clean-env
 
 env: $(STAMP)
 
@@ -46,6 +47,11 @@ run: env
 	mpirun -n $(NP) $(VPY) -m psph run terzaghi --out $(OUT)
 	$(VPY) -m psph plot $(OUT)
 
+# Any built-in scene on NP ranks with its pictures: make scene-harmonic, scene-strip_footing
+scene-%: env
+	mpirun -n $(NP) $(VPY) -m psph run $* --out runs/$*
+	$(VPY) -m psph plot runs/$*
+
 test: test-serial test-mpi
 
 test-serial: env
@@ -58,6 +64,12 @@ bench: env
 	mpirun -n 1 $(VPY) bench/throughput.py
 	mpirun -n 2 $(VPY) bench/throughput.py
 	$(VPY) bench/throughput.py --plot
+
+bench-time-vs-error: env
+	$(VPY) bench/time_vs_error.py
+
+bench-stability: env
+	$(VPY) bench/stability.py
 
 lint: env
 	$(VENV)/bin/ruff check psph tests bench

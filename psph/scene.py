@@ -162,6 +162,11 @@ class Scene(_Model):
                 if b.max[d] > hi[d] + 1e-12:
                     raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
                                 f"particles outside the walls (domain.max[{d}] = {hi[d]})")
+        for name, pt in self.output.probes.items():
+            for d in range(2):
+                if not lo[d] <= pt[d] <= hi[d]:
+                    raise _Rule(f"output.probes.{name}", pt,
+                                f"probe outside the domain [{lo}, {hi}]")
         if self.time.end is None:
             if self.verification.reference == "none" or not self.verification.tv:
                 raise _Rule("time.end", None, "required (no verification.tv to derive it from)")

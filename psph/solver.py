@@ -191,9 +191,9 @@ class Simulation:
         st = self.store
         if self.scratch.shape[1] < st.cap:
             self.scratch = np.zeros((2, st.cap))
-        shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.vol, st.drained_from, self.t,
-                         self.cell_start, self.order, self.ncell, self.h, self.scratch[0],
-                         self.scratch[1])
+        shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
+                         st.drained_from, self.t, self.cell_start, self.order, self.ncell,
+                         self.h, self.scratch[0], self.scratch[1])
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
             stage.run()
 

@@ -33,7 +33,13 @@ CASES = [
     (["--set", "particles.blocks.0.max=[0.1, 1.5]"], ["particles.blocks[0].max[1]", "1.5",
                                                       "outside the walls"]),
     (["--set", "pressure.alpha=1.5"], ["pressure.alpha", "1.5", "less than or equal to 1"]),
+    (["--set", "pressure.alpha=-0.1"], ["pressure.alpha", "-0.1", "greater than or equal to 0"]),
     (["--set", "pressure.R=0"], ["pressure.R", "greater than 0"]),
+    (["--set", "pressure.R=-3"], ["pressure.R", "-3", "greater than 0"]),
+    (["--set", "pressure.beta=-0.04"], ["pressure.beta", "-0.04", "greater than or equal to 0"]),
+    (["--set", "stabilisation.shepard_every=-5"], ["stabilisation.shepard_every", "-5"]),
+    (["--set", "output.probes.A=[0.05, 2.0]"], ["output.probes.A", "2.0", "outside the domain"]),
+    (["--set", "verification.reference='nope'"], ["verification.reference", "nope"]),
     (["--set", "time.dt=1e-4"], ["time.dt", "0.0001", "solid limit Eq. (41)"]),
     (["--set", "boundaries.top.motion='sticky'"], ["boundaries.top.motion", "sticky"]),
 ]
@@ -97,7 +103,9 @@ def test_validate_prints_resolved_scene():
 
 def test_list_names_builtin_scenes():
     r = run_cli("list")
-    assert r.returncode == 0 and r.stdout.startswith("terzaghi")
+    assert r.returncode == 0
+    names = [line.split()[0] for line in r.stdout.splitlines()]
+    assert names == ["harmonic", "strip_footing", "terzaghi"]
 
 
 def test_set_override_reaches_resolved_scene(tmp_path):

@@ -39,9 +39,11 @@ def _filtered(x, p, h, n_owned=None, drained=None, t=0.0):
     n = len(x)
     cell_start, order, ncell = cell_lists(x, h)
     q = p.copy()
+    q_prev = p - 1.0  # a uniform TPI increment of 1 Pa per step
     drained = np.full(n, math.inf) if drained is None else drained
-    shepard_pressure(n, n if n_owned is None else n_owned, x, q, np.full(n, 1e-4), drained, t,
-                     cell_start, order, ncell, h, np.zeros(n), np.zeros(n))
+    shepard_pressure(n, n if n_owned is None else n_owned, x, q, q_prev, np.full(n, 1e-4),
+                     drained, t, cell_start, order, ncell, h, np.zeros(n), np.zeros(n))
+    assert np.allclose(q - q_prev, 1.0, rtol=0, atol=1e-9 * max(1.0, np.abs(p).max()))
     return q
 
 

@@ -14,10 +14,12 @@ from psph.kernels.spline import w_cubic
 
 
 @nb.njit(cache=True)
-def shepard_pressure(n_total, n_owned, x, p, vol, drained_from, t, cell_start, order, ncell,
-                     h, num, den):
+def shepard_pressure(n_total, n_owned, x, p, p_prev, vol, drained_from, t, cell_start, order,
+                     ncell, h, num, den):
     """Filter p of particles 0..n_owned-1 in place (Eq. 46). Particles with an imposed
-    pressure (drained_from <= t) keep it. num, den: scratch arrays of length >= n_owned."""
+    pressure (drained_from <= t) keep it. p_prev moves with p, so the TPI increment
+    p - p_prev of Eq. (39) is not changed by the filter. num, den: scratch arrays of
+    length >= n_owned."""
     w0 = w_cubic(0.0, h)
     for i in range(n_owned):
         num[i] = vol[i] * w0 * p[i]
@@ -61,4 +63,6 @@ def shepard_pressure(n_total, n_owned, x, p, vol, drained_from, t, cell_start, o
                             den[b] += vol[a] * w
     for i in range(n_owned):
         if drained_from[i] > t and den[i] > 0.0:
-            p[i] = num[i] / den[i]
+            filtered = num[i] / den[i]
+            p_prev[i] += filtered - p[i]
+            p[i] = filtered

@@ -1,0 +1,42 @@
+"""Short windows of the Section 4.2 and 4.3 verification scenes, on 2 ranks (pytest-mpi).
+
+The full runs (`psph run harmonic`, `psph run strip_footing`) are in the README."""
+
+import pytest
+
+from psph.run import run
+from psph.scene import load_scene
+from tests.test_mpi import _shared_tmp
+
+
+@pytest.mark.mpi(min_size=2)
+def test_harmonic_first_20ms_matches_1d_reference(tmp_path_factory):
+    """Pressure at 0.4, 1, 2 and 5 m depth against the 1D u-p_l grid solution with the
+    same damping (psph.verify.harmonic), within 2 % of the peak load."""
+    from mpi4py import MPI
+
+    out = _shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
+    scene = load_scene("harmonic", ["time.end=0.02", "output.times=[]"])
+    err = run(scene, out / "harmonic", quiet=True)["errors"]
+    assert set(err["probes"]) == {"z0_4", "z1_0", "z2_0", "z5_0"}
+    for name, e in err["probes"].items():
+        assert e["max_abs_error_over_peak_load_same_damping"] < 0.02, (name, e)
+        assert e["peak_Pa"] > 1e3, (name, e)  # the load has reached every probe
+
+
+@pytest.mark.mpi(min_size=2)
+def test_strip_footing_loading_stage_matches_undrained_elastic(tmp_path_factory):
+    """At the end of the impervious ramp (t_L = 0.1 s) the pressure at A (under the centre)
+    and B (under the edge, deeper) is the undrained elastic q alpha / pi within 3 % of q,
+    and B < A as in the paper's Fig. 11."""
+    from mpi4py import MPI
+
+    out = _shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
+    scene = load_scene("strip_footing", ["time.end=0.1", "output.times=[]",
+                                          "output.interval=0.0"])
+    err = run(scene, out / "strip", quiet=True)["errors"]
+    q = err["load_Pa"]
+    a, b = err["probes"]["A"], err["probes"]["B"]
+    for e in (a, b):
+        assert abs(e["p_at_load_end_Pa"] - e["undrained_reference_Pa"]) < 0.03 * q, e
+    assert b["p_at_load_end_Pa"] < a["p_at_load_end_Pa"]
