@@ -47,6 +47,23 @@ def test_tpi_alpha_half_at_R17(tmp_path):
     R = st.dt_main / st.limits["dt_fluid_eq42"]
     assert 16 < R < 19
     _check(run(scene, tmp_path, quiet=True))
+    _check_no_spike_at_drained_switch(tmp_path / "history.csv", t_drain=0.01)
+
+
+def _check_no_spike_at_drained_switch(path, t_drain):
+    """The step that drains the top and hands over from explicit to TPI leaves the pressure
+    at the base and mid-depth (probes) below its loading-stage level: no spike."""
+    lines = path.read_text().split()
+    keys = lines[0].split(",")
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    col = {k: rows[:, i] for i, k in enumerate(keys)}
+    t = col["time"]
+    before = (t > 0.8 * t_drain) & (t <= t_drain)
+    after = (t > t_drain) & (t < 3 * t_drain)
+    assert before.sum() >= 2 and after.sum() >= 5
+    for probe in ("p_base", "p_mid"):
+        p = col[probe]
+        assert p[after].max() <= p[before].max() + 0.005 * 1e4, probe
 
 
 @pytest.mark.slow
