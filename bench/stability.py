@@ -60,7 +60,7 @@ def map_case(R: float, alpha: float) -> dict:
     from psph.scene import fluid_dt_limit, load_scene
 
     # k such that dt_Eq42(k) = DT / R; Eq. (42) is proportional to 1/k
-    ref = load_scene("terzaghi", COLUMN + ["material.k=1e-3"])
+    ref = load_scene("terzaghi", COLUMN + ["material.k=1e-3", "time.end=1.0"])
     k = 1e-3 * fluid_dt_limit(ref) * R / DT
     end = 0.001 + N_TPI * DT
     ov = COLUMN + [f"material.k={k!r}", f"time.dt={DT}", f"pressure.alpha={alpha}",
