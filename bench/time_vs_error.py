@@ -2,9 +2,10 @@
 
 Every case is the `terzaghi` scene on one rank, run to T_v = 0.5. Time is the run's
 CPU time (`time.process_time`, one rank, one thread): equal to its wall time on an idle
-core, and unaffected by other jobs sharing the machine; the wall time is recorded too. The explicit scheme runs
-at its stable dt (Eq. 42); TPI sweeps dt (R = dt / dt_Eq42) and alpha, with its impervious
-loading stage explicit (as in the paper). Per case: wall time of the run and the error
+core, and unaffected by other jobs sharing the machine; the wall time is recorded too.
+The explicit scheme runs at its stable dt (Eq. 42); TPI sweeps dt (R = dt / dt_Eq42) and
+alpha, with its impervious loading stage explicit (as in the paper). Per case: the time
+of the run and the error
 against the analytical solution: max |p - p_a| / q over T_v = 0.1, 0.2, 0.5, and the max
 settlement error / final settlement over T_v in [0.1, 0.5].
 
