@@ -121,7 +121,7 @@ def plot(data: dict, path: Path) -> None:
     ax1.set_xlabel("R = dt / dt_Eq42")
     ax1.set_ylabel("alpha")
     ax1.set_title(f"TPI stability, {N_TPI} steps at dt = {DT:g} s")
-    ax1.legend(fontsize=7, loc="lower left")
+    ax1.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     lr = data["long"]
     if lr.get("stable"):
         t = np.array(lr["time"])
