@@ -127,8 +127,11 @@ def _strip_picture(out: Path, scene, snaps: list[dict]) -> Path:
     snap = min(snaps, key=lambda s: abs(s["time"] - err["t_load_end_s"]))
     sc = ax3.scatter(snap["x"][:, 0], snap["x"][:, 1], c=snap["p"] / 1e3, s=2, cmap="viridis")
     fig.colorbar(sc, ax=ax3, label="p (kPa)")
+    top = max(b.max[1] for b in scene.particles.blocks)
+    ax3.set_xlim(0.0, 0.4 * top)
+    ax3.set_ylim(0.6 * top, top)
     ax3.set_aspect("equal")
-    ax3.set_title(f"p at t = {snap['time']:.3g} s (end of loading)", fontsize=9)
+    ax3.set_title(f"p at t = {snap['time']:.3g} s (end of loading), top corner", fontsize=9)
     fig.suptitle(f"{scene.name}: flexible strip footing, q = {err['load_Pa'] / 1e3:g} kPa, "
                  f"half-width {err['load_half_width_m']:g} m (symmetry plane at x = 0)")
     path = out / "strip_footing.png"
