@@ -1,4 +1,6 @@
-"""Small particle sets for kernel tests."""
+"""Small particle sets for kernel tests, and a temporary directory shared by MPI ranks."""
+
+from pathlib import Path
 
 import numpy as np
 
@@ -52,3 +54,9 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
 def inverse_moment(s):
     m = s[:, 0:4].reshape(-1, 2, 2)
     return np.linalg.inv(m)
+
+
+def shared_tmp(comm, tmp_path_factory) -> Path:
+    """One temporary directory, made by rank 0 and known to every rank."""
+    path = str(tmp_path_factory.mktemp("mpi")) if comm.Get_rank() == 0 else None
+    return Path(comm.bcast(path, root=0))

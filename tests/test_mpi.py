@@ -13,6 +13,7 @@ import pytest
 from psph.io.snapshots import read_snapshots
 from psph.run import run
 from psph.scene import load_scene
+from tests.helpers import shared_tmp
 
 COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification.tv=[]",
           "output.times=[0.005, 0.012]"]  # explicit loading, drain at 0.01 s, then TPI
@@ -49,11 +50,6 @@ end = 0.3
 damping = 0.05
 """)
     return f
-
-
-def _shared_tmp(comm, tmp_path_factory) -> Path:
-    path = str(tmp_path_factory.mktemp("mpi")) if comm.Get_rank() == 0 else None
-    return Path(comm.bcast(path, root=0))
 
 
 def _one_vs_two(comm, scene, out: Path):
@@ -93,7 +89,7 @@ def test_consolidation_column_one_vs_two_ranks_bitwise(tmp_path_factory):
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    out = _shared_tmp(comm, tmp_path_factory)
+    out = shared_tmp(comm, tmp_path_factory)
     _one_vs_two(comm, load_scene("terzaghi", COLUMN), out)
 
 
@@ -102,7 +98,7 @@ def test_falling_block_migrates_bitwise(tmp_path_factory):
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    out = _shared_tmp(comm, tmp_path_factory)
+    out = shared_tmp(comm, tmp_path_factory)
     scene = load_scene(str(falling_block(out)))
     _one_vs_two(comm, scene, out)
     crossed = None
@@ -121,7 +117,7 @@ def test_shepard_and_eq47_column_one_vs_two_ranks_bitwise(tmp_path_factory):
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    out = _shared_tmp(comm, tmp_path_factory)
+    out = shared_tmp(comm, tmp_path_factory)
     scene = load_scene("terzaghi", COLUMN + ["stabilisation.shepard_every=7",
                                              "pressure.beta=0.04"])
     _one_vs_two(comm, scene, out)

@@ -6,7 +6,7 @@ import pytest
 
 from psph.run import run
 from psph.scene import load_scene
-from tests.test_mpi import _shared_tmp
+from tests.helpers import shared_tmp
 
 
 @pytest.mark.mpi(min_size=2)
@@ -15,7 +15,7 @@ def test_harmonic_first_20ms_matches_1d_reference(tmp_path_factory):
     same damping (psph.verify.harmonic), within 2 % of the peak load."""
     from mpi4py import MPI
 
-    out = _shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
+    out = shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
     scene = load_scene("harmonic", ["time.end=0.02", "output.times=[]"])
     err = run(scene, out / "harmonic", quiet=True)["errors"]
     assert set(err["probes"]) == {"z0_4", "z1_0", "z2_0", "z5_0"}
@@ -31,7 +31,7 @@ def test_strip_footing_loading_stage_matches_undrained_elastic(tmp_path_factory)
     and B < A as in the paper's Fig. 11."""
     from mpi4py import MPI
 
-    out = _shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
+    out = shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
     scene = load_scene("strip_footing", ["time.end=0.1", "output.times=[]",
                                           "output.interval=0.0"])
     err = run(scene, out / "strip", quiet=True)["errors"]

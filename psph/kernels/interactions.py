@@ -25,6 +25,7 @@ import math
 
 import numba as nb
 
+from psph.kernels.neighbours import half_stencil
 from psph.kernels.spline import dw_cubic
 
 NSUMS = 25
@@ -51,26 +52,10 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
             c = cy * ncx + cx
             for sa in range(cell_start[c], cell_start[c + 1]):
                 a = order[sa]
-                # half stencil: rest of own cell, then (+1,0), (-1,+1), (0,+1), (+1,+1)
                 for k in range(5):
-                    if k == 0:
-                        nc = c
-                        s0 = sa + 1
-                    else:
-                        if k == 1:
-                            ox, oy = 1, 0
-                        elif k == 2:
-                            ox, oy = -1, 1
-                        elif k == 3:
-                            ox, oy = 0, 1
-                        else:
-                            ox, oy = 1, 1
-                        nx = cx + ox
-                        ny = cy + oy
-                        if nx < 0 or nx >= ncx or ny >= ncy:
-                            continue
-                        nc = ny * ncx + nx
-                        s0 = cell_start[nc]
+                    nc, s0 = half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start)
+                    if nc < 0:
+                        continue
                     for sb in range(s0, cell_start[nc + 1]):
                         b = order[sb]
                         own_a = a < n_owned

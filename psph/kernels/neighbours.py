@@ -12,6 +12,30 @@ import numpy as np
 
 
 @nb.njit(cache=True, inline="always")
+def half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start):
+    """Neighbour cell k (0-4) of the half stencil around cell c = (cx, cy) and the first
+    sorted slot to visit in it, or (-1, 0) outside the grid. k = 0: the rest of cell c
+    after slot sa; then (+1, 0), (-1, +1), (0, +1), (+1, +1). Visiting these from every
+    cell meets each pair once, in an order fixed by the global cell numbering."""
+    if k == 0:
+        return c, sa + 1
+    if k == 1:
+        ox, oy = 1, 0
+    elif k == 2:
+        ox, oy = -1, 1
+    elif k == 3:
+        ox, oy = 0, 1
+    else:
+        ox, oy = 1, 1
+    nx = cx + ox
+    ny = cy + oy
+    if nx < 0 or nx >= ncx or ny >= ncy:
+        return -1, 0
+    nc = ny * ncx + nx
+    return nc, cell_start[nc]
+
+
+@nb.njit(cache=True, inline="always")
 def _clamped_cell(c, origin, cell_size, lo, hi):
     """Cell coordinate of c, clamped to [lo, hi]; NaN goes to lo. Particles outside the
     domain are flagged by the update (exit 3); clamping keeps the grid bounded meanwhile."""

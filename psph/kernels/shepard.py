@@ -10,6 +10,7 @@ import math
 
 import numba as nb
 
+from psph.kernels.neighbours import half_stencil
 from psph.kernels.spline import w_cubic
 
 
@@ -32,19 +33,10 @@ def shepard_pressure(n_total, n_owned, x, p, p_prev, vol, drained_from, t, cell_
             c = cy * ncx + cx
             for sa in range(cell_start[c], cell_start[c + 1]):
                 a = order[sa]
-                for k in range(5):  # half stencil, as in interactions.pair_sums
-                    if k == 0:
-                        nc = c
-                        s0 = sa + 1
-                    else:
-                        ox = (1, -1, 0, 1)[k - 1]
-                        oy = (0, 1, 1, 1)[k - 1]
-                        nx = cx + ox
-                        ny = cy + oy
-                        if nx < 0 or nx >= ncx or ny >= ncy:
-                            continue
-                        nc = ny * ncx + nx
-                        s0 = cell_start[nc]
+                for k in range(5):
+                    nc, s0 = half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start)
+                    if nc < 0:
+                        continue
                     for sb in range(s0, cell_start[nc + 1]):
                         b = order[sb]
                         if a >= n_owned and b >= n_owned:
