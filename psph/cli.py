@@ -1,12 +1,13 @@
-"""Command line (DESIGN.md): run, list, validate, plot. Exit codes: 0 done, 1 other error,
-2 bad input, 3 numerical failure. Only rank 0 prints. Nothing numerical here."""
+"""Command line (DESIGN.md): run, list, validate, plot, export. Exit codes: 0 done, 1 other
+error, 2 bad input, 3 numerical failure, 75 stopped by a signal after writing a checkpoint
+(rerun with --restart). Only rank 0 prints. Nothing numerical here."""
 
 import argparse
 import sys
 import traceback
 from pathlib import Path
 
-from psph.errors import NumericalError, SceneError
+from psph.errors import Interrupted, NumericalError, SceneError
 
 
 def _rank() -> int:
@@ -23,7 +24,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=Path, help="output directory (default runs/<name>)")
     r.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
                    help="override a scene value (repeatable)")
-    r.add_argument("--restart", type=Path, help="continue from a checkpoint (not yet)")
+    r.add_argument("--restart", type=Path, metavar="CHECKPOINT",
+                   help="continue from OUT/checkpoint.h5 (default --out: its directory)")
     r.add_argument("--quiet", action="store_true", help="no progress output")
     sub.add_parser("list", help="built-in scenes")
     v = sub.add_parser("validate", help="parse + validate, print the resolved scene")
@@ -32,6 +34,9 @@ def _parser() -> argparse.ArgumentParser:
     pl = sub.add_parser("plot", help="PNG pictures of a run's output directory")
     pl.add_argument("out", type=Path)
     pl.add_argument("--field", default="p")
+    ex = sub.add_parser("export", help="snapshots as VTU files (+ .pvd) or XDMF, via meshio")
+    ex.add_argument("out", type=Path)
+    ex.add_argument("--format", choices=("vtu", "xdmf"), default="vtu")
     return p
 
 
@@ -69,6 +74,10 @@ def main(argv: list[str] | None = None) -> int:
         if rank0:
             print(f"psph: numerical failure: {e}", file=sys.stderr)
         return 3
+    except Interrupted as e:
+        if rank0:
+            print(f"psph: {e}", file=sys.stderr)
+        return Interrupted.exit_code
     except Exception:
         # an error on one rank must not leave the others waiting in a collective
         print(f"psph: internal error on rank {_rank()}:", file=sys.stderr)
@@ -102,19 +111,25 @@ def _dispatch(args, rank0: bool) -> int:
             for path in plot_run(args.out, args.field):
                 print(f"wrote {path}")
         return 0
+    if args.command == "export":
+        from psph.io.export import export_run
+
+        if rank0:
+            for path in export_run(args.out, args.format):
+                print(f"wrote {path}")
+        return 0
     if args.command == "run":
-        if args.restart is not None:
-            raise SceneError(f"--restart {args.restart}: checkpoint/restart is not implemented "
-                             "yet")
         s = sc.load_scene(args.scene, args.set)
-        out = args.out or Path("runs") / s.name
+        out = args.out or (args.restart.parent if args.restart else Path("runs") / s.name)
         from psph.run import run
 
-        summary = run(s, out, quiet=args.quiet)
+        summary = run(s, out, quiet=args.quiet, restart=args.restart)
         if rank0:
             msg = (f"psph: {s.name}: {summary['steps']} steps, t = {summary['end_time_s']:.4g} s "
                    f"in {summary['wall_time_s']:.1f} s on {summary['ranks']} rank(s), "
                    f"{summary['steps_per_second']:.0f} steps/s -> {out}")
+            if args.restart:
+                msg += f" (restarted: {summary['steps_this_run']} steps in this run)"
             print(msg)
             err = summary.get("errors")
             if err and err.get("max_abs_p_error_over_q") is not None:

@@ -11,3 +11,10 @@ class NumericalError(Exception):
     """Numerical failure (NaN/inf, particle out of the domain, dt collapse). Exit code 3."""
 
     exit_code = 3
+
+
+class Interrupted(Exception):
+    """Stopped by SIGTERM/SIGUSR1 (a scheduler's wall-time limit) after writing a
+    checkpoint. Exit code 75 (EX_TEMPFAIL: rerun with --restart to continue)."""
+
+    exit_code = 75

@@ -6,8 +6,10 @@ import time
 
 
 class Progress:
-    def __init__(self, end_time: float, enabled: bool, log_every: float = 5.0):
+    def __init__(self, end_time: float, enabled: bool, log_every: float = 5.0,
+                 start_time: float = 0.0):
         self.end = end_time
+        self.t0 = start_time
         self.enabled = enabled
         self.tty = enabled and sys.stderr.isatty()
         self.log_every = log_every
@@ -18,7 +20,7 @@ class Progress:
         if self.tty:
             from tqdm import tqdm
 
-            self.bar = tqdm(total=end_time, unit="s", unit_scale=False, file=sys.stderr,
+            self.bar = tqdm(total=end_time, initial=start_time, unit="s", unit_scale=False, file=sys.stderr,
                             bar_format="{l_bar}{bar}| t={n:.4g}/{total:.4g} s "
                                        "[{elapsed}<{remaining}] {postfix}")
 
@@ -36,8 +38,9 @@ class Progress:
         elif now - self.last >= self.log_every:
             rate = (step - self.last_step) / (now - self.last)
             frac = t / self.end if self.end > 0 else 1.0
+            done = (t - self.t0) / (self.end - self.t0) if self.end > self.t0 else 1.0
             el = now - self.start
-            eta = el * (1 - frac) / frac if frac > 0 else float("nan")
+            eta = el * (1 - done) / done if done > 0 else float("nan")
             print(f"[psph] t = {t:.5g}/{self.end:.5g} s ({100 * frac:.1f} %), step {step}, "
                   f"{rate:,.0f} steps/s, elapsed {el:.0f} s, ETA {eta:.0f} s", flush=True)
         else:

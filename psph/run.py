@@ -2,18 +2,25 @@
 
 import json
 import math
+import signal
 import time
 from pathlib import Path
 
 import numpy as np
 
 from psph.decomposition.slabs import Slabs, slab_cuts
+from psph.errors import Interrupted
+from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
 from psph.physics.initial import initial_particles
-from psph.scene import Scene, to_toml
+from psph.scene import Scene, check_restart_scene, to_toml
 from psph.solver import Simulation
 from psph.verify import reference_times
 from psph.verify.errors import TerzaghiMonitor
+
+
+CONTROL_EVERY = 20  # steps between the collective checks (failure, stop signal, wall clock)
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGUSR1)
 
 
 def _slab_axis(scene: Scene) -> int:
@@ -23,13 +30,15 @@ def _slab_axis(scene: Scene) -> int:
     return int(np.argmax(ext))
 
 
-def make_slabs(scene: Scene, comm=None) -> Slabs:
+def make_slabs(scene: Scene, comm=None, x: np.ndarray | None = None) -> Slabs:
+    """Slabs with equal particle counts for the positions `x` (default: the initial ones)."""
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD if comm is None else comm
     axis = _slab_axis(scene)
-    x = initial_particles(scene)["x"]
-    return Slabs(axis, slab_cuts(x[:, axis], comm.Get_size()), comm)
+    if x is None:
+        x = initial_particles(scene)["x"]
+    return Slabs(axis, slab_cuts(x[:, axis], comm.Get_size(), 2.0 * scene.h), comm)
 
 
 def snapshot_times(scene: Scene) -> list[float]:
@@ -45,12 +54,46 @@ def snapshot_times(scene: Scene) -> list[float]:
     return sorted(times)
 
 
-def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
-    """Run `scene` into `out` (collective). Returns the summary dict (on every rank)."""
-    slabs = make_slabs(scene, comm)
-    comm = slabs.comm
-    rank0 = slabs.rank == 0
+class StopRequest:
+    """Turns SIGTERM / SIGUSR1 into a flag the time loop polls (collectively) so that all
+    ranks stop at the same step after writing a checkpoint. Restores the old handlers."""
+
+    def __init__(self):
+        self.signal: int | None = None
+        self._old = {}
+
+    def __enter__(self):
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            for sig in STOP_SIGNALS:
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def _handle(self, signum, frame) -> None:
+        self.signal = signum
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        return False
+
+
+def run(scene: Scene, out: Path, comm=None, quiet: bool = False,
+        restart: Path | None = None) -> dict:
+    """Run `scene` into `out` (collective), from t = 0 or from the checkpoint `restart`.
+    Returns the summary dict (on every rank). Raises Interrupted after a stop signal
+    (the checkpoint is written first), NumericalError on a numerical failure."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD if comm is None else comm
     out = Path(out)
+    meta, state = None, None
+    if restart is not None:  # read and check before anything is written
+        meta, state = read_checkpoint(restart)
+        check_restart_scene(meta["scene"], scene, f"--restart {restart}")
+    slabs = make_slabs(scene, comm, None if state is None else state["x"])
+    rank0 = slabs.rank == 0
     toml_text = to_toml(scene)
     if rank0:
         out.mkdir(parents=True, exist_ok=True)
@@ -58,22 +101,37 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
     comm.Barrier()
 
     wall0 = time.perf_counter()
-    sim = Simulation(scene, slabs)
-    writer = SnapshotWriter(out / "particles.h5", comm, scene.dim, toml_text)
+    if meta is None:
+        sim = Simulation(scene, slabs)
+    else:
+        sim = Simulation(scene, slabs, state, t=meta["t"], step=meta["step"])
+    del state
+    writer = SnapshotWriter(out / "particles.h5", comm, scene.dim, toml_text,
+                            resume_step=None if meta is None else sim.step)
     monitor = TerzaghiMonitor(scene, slabs) if scene.verification.reference == "terzaghi" \
         else None
     history = []
     probes = probe_ids(scene)
-    pending = snapshot_times(scene)
+    pending = [t for t in snapshot_times(scene) if meta is None or t > sim.t * (1 + 1e-12)]
     end = scene.time.end
     next_hist = 0.0
+    if meta is not None:
+        next_hist = meta["next_hist"]
+        if monitor is not None:
+            monitor.restore(meta["monitor"])
+        if rank0:
+            history = read_history(restart)
+    ck = scene.checkpoint
+    ck_path = out / "checkpoint.h5"
+    last_ck_wall = time.perf_counter()
     from psph.progress import Progress
 
-    progress = Progress(end, enabled=rank0 and not quiet)
+    progress = Progress(end, enabled=rank0 and not quiet, start_time=sim.t)
     setup_seconds = time.perf_counter() - wall0
     loop0 = time.perf_counter()
 
     def snapshot():
+        slabs.check_census(sim.store, sim.n_global, sim.step, sim.t)
         writer.write(sim.step, sim.t, sim.store)
         if monitor is not None:
             monitor.snapshot(sim)
@@ -88,35 +146,83 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
         if rank0:
             history.append(row)
 
-    try:
-        snapshot()
-        pending.pop(0)
-        diagnostics()
-        next_hist += scene.output.history_interval
-        while sim.t < end * (1 - 1e-12):
-            sim.advance_one()
-            if sim.step % 100 == 0:
-                sim.check_failure()
-            if sim.t >= next_hist:
-                sim.check_failure()
-                diagnostics()
-                while next_hist <= sim.t:
-                    next_hist += scene.output.history_interval
-            while pending and sim.t >= pending[0] * (1 - 1e-12):
-                pending.pop(0)
-                sim.check_failure()
-                snapshot()
-            if sim.step % 32 == 0:
-                progress.update(sim.t, sim.step)
-        sim.check_failure()
-        if pending:
-            snapshot()
-    finally:
-        progress.close()
-        writer.close()
+    def checkpoint():
+        nonlocal last_ck_wall
+        sim.check_failure()  # never save a broken state
+        info = {"t": sim.t, "step": sim.step, "n_global": sim.n_global,
+                "next_hist": next_hist, "scene": toml_text,
+                "monitor": None if monitor is None else monitor.state(),
+                "ranks": slabs.size}
+        write_checkpoint(ck_path, comm, sim.store, info, history=history if rank0 else None)
+        last_ck_wall = time.perf_counter()
 
-    loop_seconds = time.perf_counter() - loop0
+    def control() -> bool:
+        """Collective: raise a failure seen on any rank; checkpoint when due by wall
+        clock; True if a stop signal reached any rank."""
+        due = ck.wall_seconds > 0 and time.perf_counter() - last_ck_wall >= ck.wall_seconds
+        flags = slabs.allreduce_max_ints([sim.failure is not None,
+                                          stop.signal is not None, due])
+        if flags[0]:
+            sim.raise_failure()
+        if flags[2] and not flags[1]:
+            checkpoint()
+        return bool(flags[1])
+
+    with StopRequest() as stop:
+        try:
+            if meta is None:
+                snapshot()
+                pending.pop(0)
+                diagnostics()
+                next_hist += scene.output.history_interval
+            while sim.t < end * (1 - 1e-12):
+                sim.advance_one()
+                if sim.step % CONTROL_EVERY == 0 and control():
+                    checkpoint()
+                    _finish(sim, slabs, out, history, setup_seconds,
+                            time.perf_counter() - loop0, monitor, "interrupted")
+                    signame = signal.Signals(
+                        comm.allreduce(stop.signal or 0, op=MPI.MAX)).name
+                    raise Interrupted(
+                        f"stopped by {signame} at step {sim.step}, t = {sim.t:.6g} s; "
+                        f"checkpoint written: continue with --restart {ck_path}")
+                if ck.every and sim.step % ck.every == 0:
+                    checkpoint()
+                if sim.t >= next_hist:
+                    sim.check_failure()
+                    diagnostics()
+                    while next_hist <= sim.t:
+                        next_hist += scene.output.history_interval
+                while pending and sim.t >= pending[0] * (1 - 1e-12):
+                    pending.pop(0)
+                    sim.check_failure()
+                    snapshot()
+                if sim.step % 32 == 0:
+                    progress.update(sim.t, sim.step)
+            sim.check_failure()
+            if pending:
+                snapshot()
+            if ck.at_end:
+                checkpoint()
+        finally:
+            progress.close()
+            writer.close()
+
+    return _finish(sim, slabs, out, history, setup_seconds, time.perf_counter() - loop0,
+                   monitor, "finished", restart)
+
+
+def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, status,
+            restart=None) -> dict:
+    """Summary (and verification errors) on every rank; rank 0 writes history.csv and
+    summary.json. Collective."""
     summary = _summary(sim, slabs, setup_seconds, loop_seconds, monitor)
+    summary["status"] = status
+    if restart is not None:
+        summary["restarted_from"] = str(restart)
+    scene = sim.scene
+    rank0 = slabs.rank == 0
+    probes = probe_ids(scene)
     verification = None
     if rank0 and history:
         from psph.verify import history_errors
@@ -124,7 +230,7 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False) -> dict:
         cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
         x0 = initial_particles(scene)["x"] if probes else None
         verification = history_errors(scene, cols, {k: tuple(x0[i]) for k, i in probes.items()})
-    verification = comm.bcast(verification, root=0)
+    verification = slabs.comm.bcast(verification, root=0)
     if verification is not None:
         summary["errors"] = verification
     if rank0:
@@ -162,7 +268,8 @@ def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
     pmax = sim.slabs.allreduce_max(float(np.max(st.p[:n])) if n else -math.inf)
     row = {"time": sim.t, "step": sim.step,
            "settlement": tot[0] / tot[1] if tot[1] > 0 else 0.0,
-           "kinetic_energy": tot[2], "p_max": pmax}
+           "kinetic_energy": tot[2], "p_max": pmax,
+           "imbalance": sim.slabs.imbalance(st)}
     for k, name in enumerate(probes):
         row[f"p_{name}"] = tot[3 + 3 * k]
         row[f"ux_{name}"] = tot[4 + 3 * k]
@@ -186,7 +293,8 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
                      "mean_s": sum(g[name] for g in gathered) / len(gathered),
                      "calls": next(s.calls for s in sim.stages if s.name == name)}
               for name in stage_local}
-    psteps = sim.n_global * sim.step
+    steps = sim.step - sim.first_step  # this run's share (a restart starts later)
+    psteps = sim.n_global * steps
     summary = {
         "scene": sim.scene.name,
         "wall_time_s": setup_seconds + loop_seconds,
@@ -198,11 +306,21 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
         "ranks": slabs.size,
         "dt": {"main_s": sim.stepping.dt_main, "explicit_s": sim.stepping.dt_explicit,
                **sim.stepping.limits},
-        "steps_per_second": sim.step / loop_seconds if loop_seconds > 0 else None,
+        "steps_this_run": steps,
+        "steps_per_second": steps / loop_seconds if loop_seconds > 0 else None,
         "particle_steps_per_second": psteps / loop_seconds if loop_seconds > 0 else None,
         "particle_steps_per_second_per_core":
             psteps / loop_seconds / slabs.size if loop_seconds > 0 else None,
         "stages_run": [s.name for s in sim.stages],
+        "load_balance": {
+            "measure": "max/mean particles owned per rank",
+            "threshold": sim.scene.decomposition.imbalance_threshold,
+            "check_every_steps": sim.scene.decomposition.rebalance_every,
+            "rebalances": slabs.rebalances,
+            "imbalance_final": slabs.imbalance(sim.store),
+            "imbalance_max_seen": slabs.max_imbalance,
+            "cuts": [float(c) for c in slabs.cuts[1:-1]],
+        },
         "stage_seconds": stages,
     }
     if monitor is not None:

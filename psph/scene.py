@@ -126,6 +126,19 @@ class Verification(_Model):
 
 class Decomposition(_Model):
     axis: Literal["auto", "x", "y"] = "auto"
+    # every this many steps the work imbalance (max/mean particles per rank) is measured;
+    # 0: never (the slabs stay as cut at the start)
+    rebalance_every: Annotated[int, Field(ge=0)] = 200
+    # recut the slabs when the imbalance exceeds this
+    imbalance_threshold: Annotated[float, Field(gt=1.0)] = 1.05
+
+
+class Checkpoint(_Model):
+    """Restart state in OUT/checkpoint.h5 (replaced atomically)."""
+
+    every: Annotated[int, Field(ge=0)] = 0  # steps between checkpoints; 0: by wall time only
+    wall_seconds: Annotated[float, Field(ge=0.0)] = 1800.0  # wall s between them; 0: off
+    at_end: bool = True  # also write one when the run finishes
 
 
 class Scene(_Model):
@@ -144,6 +157,7 @@ class Scene(_Model):
     output: Output = Output()
     verification: Verification = Verification()
     decomposition: Decomposition = Decomposition()
+    checkpoint: Checkpoint = Checkpoint()
 
     @model_validator(mode="after")
     def _consistent(self) -> "Scene":
@@ -321,3 +335,33 @@ def resolve(scene: Scene) -> Scene:
 
 def to_toml(scene: Scene) -> str:
     return tomli_w.dumps(scene.model_dump(exclude_none=True))
+
+
+# Sections a restart may change: they schedule the run, they do not change its physics.
+RESTART_MUTABLE = ("description", "time.end", "output", "checkpoint", "decomposition")
+
+
+def check_restart_scene(saved_toml: str, scene: Scene, label: str) -> None:
+    """A restart continues the same physics: every key outside RESTART_MUTABLE must equal
+    the checkpoint's. Raises SceneError naming the first key that differs."""
+    saved = _flatten(tomllib.loads(saved_toml))
+    now = _flatten(scene.model_dump(exclude_none=True))
+    for key in sorted(set(saved) | set(now)):
+        if any(key == m or key.startswith(m + ".") for m in RESTART_MUTABLE):
+            continue
+        if saved.get(key) != now.get(key):
+            raise SceneError(
+                f"{label}: {key} = {now.get(key)!r} differs from the checkpoint's "
+                f"{saved.get(key)!r}; rule: a restart may only change "
+                f"{', '.join(RESTART_MUTABLE)}")
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out

@@ -1,7 +1,7 @@
 """Builds the step pipeline once from the scene and runs the time loop.
 
-Per step: exchange (migration + halo) -> ghosts (walls) -> neighbours (cell lists) ->
-interactions (fused pair sums) -> update (Eq. 22-27, 38-45). Outputs, diagnostics and
+Per step: [rebalance every K] -> exchange (migration + halo) -> ghosts (walls) ->
+neighbours (cell lists) -> interactions (fused pair sums) -> update (Eq. 22-27, 38-45). Outputs, diagnostics and
 progress are scheduled callbacks of the loop; every decision that changes control flow
 comes from a collective or from values identical on all ranks (time, step).
 """
@@ -75,21 +75,26 @@ def time_stepping(scene: Scene) -> TimeStepping:
 class Simulation:
     """State, pipeline and clock of one run on this rank."""
 
-    def __init__(self, scene: Scene, slabs):
+    def __init__(self, scene: Scene, slabs, state: dict | None = None, t: float = 0.0,
+                 step: int = 0):
+        """`state`: global arrays of every particle field (a checkpoint) with the clock
+        (t, step) they belong to; default: the scene's initial particles at t = 0."""
         self.scene = scene
         self.slabs = slabs
         self.soil = soil_from_scene(scene)
         self.h = scene.h
         self.stepping = time_stepping(scene)
-        self.t = 0.0
-        self.step = 0
+        self.t = t
+        self.step = step
+        self.first_step = step
 
-        data = initial_particles(scene)
+        data = initial_particles(scene) if state is None else state
         self.n_global = len(data["key"])
         mine = slabs.owned_mask(data["x"])
         self.store = ParticleStore(int(2 * mine.sum()) + 256)
         self.store.load({k: v[mine] for k, v in data.items()})
-        self.store.u[:] = 0.0
+        if state is None:
+            self.store.u[:] = 0.0
 
         walls = [(side, b) for side in ("left", "right", "bottom", "top")
                  if (b := getattr(scene.boundaries, side)).motion != "free"]
@@ -131,6 +136,9 @@ class Simulation:
     def _assemble(self) -> list[Stage]:
         """Only the stages the scene needs, in order."""
         stages = []
+        k = self.scene.decomposition.rebalance_every
+        if self.slabs.size > 1 and k > 0:
+            stages.append(Stage(f"rebalance[every {k}]", self._rebalance, every=k))
         if self.slabs.size > 1:
             stages.append(Stage("exchange", self._exchange))
         else:
@@ -153,6 +161,10 @@ class Simulation:
 
     def _reset_halo(self) -> None:
         self.store.n_halo = self.store.n_ghost = 0
+
+    def _rebalance(self) -> None:
+        self.slabs.rebalance(self.store, 2.0 * self.h,
+                             self.scene.decomposition.imbalance_threshold)
 
     def _exchange(self) -> None:
         self.slabs.exchange(self.store, 2.0 * self.h)
@@ -195,7 +207,8 @@ class Simulation:
                          st.drained_from, self.t, self.cell_start, self.order, self.ncell,
                          self.h, self.scratch[0], self.scratch[1])
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
-            stage.run()
+            if not stage.name.startswith("rebalance"):
+                stage.run()
 
     def _stage(self, name: str) -> Stage:
         return next(s for s in self.stages if s.name == name)
@@ -223,10 +236,7 @@ class Simulation:
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box)
         if bad >= 0 and self.failure is None:
-            if np.isfinite(st.p[bad]) and np.all(np.isfinite(st.v[bad])):
-                what = f"x (left the domain at {st.x[bad].tolist()})"
-            else:
-                what = f"p or v (p = {st.p[bad]!r}, v = {st.v[bad].tolist()})"
+            what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
 
     # ------------------------------------------------------------------ stepping
@@ -246,10 +256,23 @@ class Simulation:
 
     def check_failure(self) -> None:
         """Collective: all ranks raise NumericalError if any rank saw a non-finite value."""
-        bad = self.failure is not None
-        if self.slabs.any(bad):
-            info = self.slabs.comm.allgather(self.failure)
-            f = min((i for i in info if i is not None), key=lambda i: (i[0], i[3]))
-            raise NumericalError(
-                f"step {f[0]}, t = {f[1]:.6g} s, particle id {f[2]} (rank {f[3]}): "
-                f"field {f[4]}")
+        if self.slabs.any(self.failure is not None):
+            self.raise_failure()
+
+    def raise_failure(self) -> None:
+        """Collective, once some rank has failed: every rank raises the same error, naming
+        the earliest failure (lowest step, then rank)."""
+        info = self.slabs.comm.allgather(self.failure)
+        f = min((i for i in info if i is not None), key=lambda i: (i[0], i[3]))
+        raise NumericalError(f"step {f[0]}, t = {f[1]:.6g} s, particle id {f[2]} "
+                             f"(rank {f[3]}): field {f[4]}")
+
+
+def _bad_field(st: ParticleStore, i: int) -> str:
+    """Name and value of the first non-finite field of particle row i, or the position of
+    a particle that left the domain."""
+    for name in ("p", "v", "stress", "x"):
+        value = st.arrays[name][i]
+        if not np.all(np.isfinite(value)):
+            return f"{name} = {np.asarray(value).tolist()} (not finite)"
+    return f"x = {st.x[i].tolist()} (left the domain)"

@@ -1,4 +1,5 @@
-"""Slabs along one axis, one per rank, with halo exchange and migration every step.
+"""Slabs along one axis, one per rank: halo exchange and migration every step, load
+balancing (recut + redistribute) when the work gets uneven, and the particle census.
 
 Each rank owns the particles whose coordinate along `axis` lies in [lo, hi). Every step,
 `exchange` sends to each neighbour rank in one message the particles that left the slab
@@ -10,13 +11,16 @@ that step, since its neighbour packed its halo before knowing of them.
 import numpy as np
 from mpi4py import MPI
 
+from psph.decomposition.balance import balanced_cuts
+from psph.errors import NumericalError
 from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
 from psph.particles import ParticleStore
 
 
-def slab_cuts(coords: np.ndarray, nranks: int) -> np.ndarray:
-    """Cut positions (nranks + 1,) giving each rank about the same number of particles;
-    the outer cuts are -inf and +inf."""
+def slab_cuts(coords: np.ndarray, nranks: int, min_width: float = 0.0) -> np.ndarray:
+    """Cut positions (nranks + 1,) giving each rank about the same number of particles,
+    inner slabs at least `min_width` wide (a halo reaches one rank only); the outer cuts
+    are -inf and +inf. `coords`: all particles (the same array on every rank)."""
     cuts = np.full(nranks + 1, np.inf)
     cuts[0] = -np.inf
     if nranks > 1:
@@ -25,6 +29,8 @@ def slab_cuts(coords: np.ndarray, nranks: int) -> np.ndarray:
         for r in range(1, nranks):
             k = min(max(r * n // nranks, 1), n - 1)
             cuts[r] = 0.5 * (c[k - 1] + c[k])
+        for r in range(2, nranks):
+            cuts[r] = max(cuts[r], cuts[r - 1] + min_width)
     return cuts
 
 
@@ -36,9 +42,10 @@ class Slabs:
         self.rank = self.comm.Get_rank()
         self.size = self.comm.Get_size()
         self.axis = axis
-        self.cuts = np.asarray(cuts, float)
-        self.lo = self.cuts[self.rank]
-        self.hi = self.cuts[self.rank + 1]
+        self.set_cuts(cuts)
+        self.rebalances = 0
+        self.last_imbalance = 1.0
+        self.max_imbalance = 1.0
         self.down = self.rank - 1 if self.rank > 0 else MPI.PROC_NULL
         self.up = self.rank + 1 if self.rank < self.size - 1 else MPI.PROC_NULL
         self._idx_cap = 0
@@ -46,6 +53,11 @@ class Slabs:
         self._recv = {}
 
     # --------------------------------------------------------------- setup
+
+    def set_cuts(self, cuts: np.ndarray) -> None:
+        self.cuts = np.asarray(cuts, float).copy()
+        self.lo = self.cuts[self.rank]
+        self.hi = self.cuts[self.rank + 1]
 
     def owned_mask(self, x: np.ndarray) -> np.ndarray:
         c = x[:, self.axis]
@@ -132,6 +144,77 @@ class Slabs:
             start += n_own_migr
         store.n_halo = start - store.n_owned
 
+    # --------------------------------------------------------------- load balance
+
+    def imbalance(self, store: ParticleStore) -> float:
+        """max / mean of the particles owned per rank (the work of a step scales with
+        them). Collective."""
+        counts = self.comm.allgather(store.n_owned)
+        mean = sum(counts) / len(counts)
+        value = max(counts) / mean if mean > 0 else 1.0
+        self.last_imbalance = value
+        self.max_imbalance = max(self.max_imbalance, value)
+        return value
+
+    def rebalance(self, store: ParticleStore, min_width: float, threshold: float) -> bool:
+        """Recut the slabs from the particle distribution and move every particle to its
+        new owner when the imbalance exceeds `threshold`. Collective; True if recut."""
+        if self.size == 1 or self.imbalance(store) <= threshold:
+            return False
+        n = store.n_owned
+        self.set_cuts(balanced_cuts(self.comm, store.x[:n, self.axis], min_width))
+        self.redistribute(store)
+        self.rebalances += 1
+        self.last_imbalance = self.imbalance(store)
+        return True
+
+    def redistribute(self, store: ParticleStore) -> None:
+        """Send every owned particle to the rank whose slab holds it (any distance, one
+        all-to-all). Halo and ghost rows are dropped. Collective."""
+        store.n_halo = store.n_ghost = 0
+        if self.size == 1:
+            return
+        n = store.n_owned
+        coord = store.x[:n, self.axis]
+        dest = np.searchsorted(self.cuts[1:-1], coord, side="right")
+        order = np.argsort(dest, kind="stable")
+        send_counts = np.bincount(dest, minlength=self.size).astype(np.int64)
+        w = store.row_width
+        send = np.zeros((max(n, 1), w))
+        pack_rows(store.all_rows, order, n, send)
+        recv_counts = np.zeros(self.size, np.int64)
+        self.comm.Alltoall(send_counts, recv_counts)
+        n_new = int(recv_counts.sum())
+        recv = np.zeros((max(n_new, 1), w))
+        sd = np.concatenate(([0], np.cumsum(send_counts)[:-1])) * w
+        rd = np.concatenate(([0], np.cumsum(recv_counts)[:-1])) * w
+        self.comm.Alltoallv([send, (send_counts * w, sd), MPI.DOUBLE],
+                            [recv, (recv_counts * w, rd), MPI.DOUBLE])
+        store.ensure(n_new + 64)
+        unpack_rows(recv, n_new, store.all_rows, 0)
+        store.n_owned = n_new
+
+    # --------------------------------------------------------------- census
+
+    def check_census(self, store: ParticleStore, n_global: int, step: int, t: float) -> None:
+        """Every global id 0..n_global-1 is owned by exactly one rank (collective); raises
+        NumericalError naming the first id lost or duplicated."""
+        keys = store.key[:store.n_owned].astype(np.int64)
+        local = np.bincount(keys[(keys >= 0) & (keys < n_global)],
+                            minlength=n_global).astype(np.int32)
+        stray = int(np.count_nonzero((keys < 0) | (keys >= n_global)))
+        total = np.empty_like(local)
+        self.comm.Allreduce(local, total, op=MPI.SUM)
+        stray = self.comm.allreduce(stray, op=MPI.SUM)
+        if stray or not np.all(total == 1):
+            bad = np.flatnonzero(total != 1)
+            pid = int(bad[0]) if len(bad) else -1
+            count = int(total[pid]) if len(bad) else 0
+            raise NumericalError(
+                f"step {step}, t = {t:.6g} s, particle id {pid}: field id (owned by {count} "
+                f"ranks instead of 1; {len(bad)} ids wrong, {stray} unknown ids) - "
+                "particles lost or duplicated in migration")
+
     # --------------------------------------------------------------- reductions
 
     def allreduce_sum(self, values: np.ndarray) -> np.ndarray:
@@ -141,6 +224,13 @@ class Slabs:
 
     def allreduce_max(self, value: float) -> float:
         return self.comm.allreduce(value, op=MPI.MAX)
+
+    def allreduce_max_ints(self, flags) -> np.ndarray:
+        """Element-wise max over ranks of a few integers (one small collective)."""
+        local = np.asarray(flags, np.int64)
+        out = np.empty_like(local)
+        self.comm.Allreduce(local, out, op=MPI.MAX)
+        return out
 
     def any(self, flag: bool) -> bool:
         return bool(self.comm.allreduce(int(flag), op=MPI.MAX))

@@ -7,6 +7,7 @@ import h5py
 import numpy as np
 
 import psph
+from psph.errors import SceneError
 
 # Output field -> (unit, description); shapes follow DESIGN.md.
 SNAPSHOT_FIELDS = {
@@ -39,17 +40,32 @@ def snapshot_arrays(store) -> dict[str, np.ndarray]:
 
 
 class SnapshotWriter:
-    """`OUT/particles.h5`, opened collectively once; `write` is collective."""
+    """`OUT/particles.h5`, opened collectively once; `write` is collective.
 
-    def __init__(self, path: Path, comm, dim: int, scene_toml: str):
+    With `resume_step` (a restart) an existing file is reopened: snapshots written after
+    that step by the interrupted run are dropped, the earlier ones are kept.
+    """
+
+    def __init__(self, path: Path, comm, dim: int, scene_toml: str,
+                 resume_step: int | None = None):
         self.path = Path(path)
         self.comm = comm
+        self.entries: list[tuple[str, float, int]] = []
+        if resume_step is not None and self.path.is_file():
+            self.f = h5py.File(self.path, "a", driver="mpio", comm=comm)
+            snaps = self.f.require_group("snapshots")
+            for name in sorted(snaps):
+                g = snaps[name]
+                if int(g.attrs["step"]) > resume_step:
+                    del snaps[name]
+                else:
+                    self.entries.append((name, float(g.attrs["time"]), len(g["id"])))
+            return
         self.f = h5py.File(self.path, "w", driver="mpio", comm=comm)
         self.f.attrs["dim"] = dim
         self.f.attrs["scene"] = scene_toml
         self.f.attrs["psph_version"] = psph.__version__
         self.f.create_group("snapshots")
-        self.entries: list[tuple[str, float, int]] = []
 
     def write(self, step: int, t: float, store) -> None:
         arrays = snapshot_arrays(store)
@@ -58,6 +74,9 @@ class SnapshotWriter:
         start = sum(counts[: self.comm.Get_rank()])
         total = sum(counts)
         name = f"{step:08d}"
+        if name in self.f["snapshots"]:  # a restart at this very step rewrites it
+            del self.f["snapshots"][name]
+            self.entries = [e for e in self.entries if e[0] != name]
         g = self.f["snapshots"].create_group(name)
         g.attrs["time"] = t
         g.attrs["step"] = step
@@ -103,15 +122,27 @@ def write_xdmf(path: Path, h5name: str, entries, dim: int) -> None:
 
 
 def read_snapshots(path: Path) -> list[dict]:
-    """All snapshots of a particles.h5 as dicts of arrays sorted by id (serial read)."""
+    """All snapshots of a particles.h5 as dicts of arrays sorted by id (serial read).
+    A missing, truncated or foreign file raises SceneError (exit 2) with one line."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"{path}: no such file")
     out = []
-    with h5py.File(path, "r") as f:
-        for name in sorted(f["snapshots"]):
-            g = f["snapshots"][name]
-            ids = g["id"][()]
-            order = np.argsort(ids)
-            snap = {k: g[k][()][order] for k in g}
-            snap["time"] = float(g.attrs["time"])
-            snap["step"] = int(g.attrs["step"])
-            out.append(snap)
+    try:
+        with h5py.File(path, "r") as f:
+            if "snapshots" not in f:
+                raise SceneError(f"{path}: not a psph particles.h5 (no /snapshots group)")
+            for name in sorted(f["snapshots"]):
+                g = f["snapshots"][name]
+                ids = g["id"][()]
+                order = np.argsort(ids)
+                snap = {k: g[k][()][order] for k in g}
+                snap["time"] = float(g.attrs["time"])
+                snap["step"] = int(g.attrs["step"])
+                out.append(snap)
+    except SceneError:
+        raise
+    except (OSError, KeyError, ValueError, IndexError) as e:
+        reason = (str(e).strip().splitlines() or [type(e).__name__])[0][:160]
+        raise SceneError(f"{path}: unreadable or truncated particles.h5 ({reason})") from None
     return out

@@ -130,7 +130,9 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         u[i, 0] += dt * v[i, 0]
         u[i, 1] += dt * v[i, 1]
         if bad < 0:
-            if not (abs(p[i]) < 1e300 and abs(v[i, 0]) < 1e300 and abs(v[i, 1]) < 1e300):
+            if not (abs(p[i]) < 1e300 and abs(v[i, 0]) < 1e300 and abs(v[i, 1]) < 1e300
+                    and abs(stress[i, 0]) < 1e300 and abs(stress[i, 1]) < 1e300
+                    and abs(stress[i, 3]) < 1e300):
                 bad = i
             elif not (box[0] <= x[i, 0] <= box[2] and box[1] <= x[i, 1] <= box[3]):
                 bad = i

@@ -53,6 +53,17 @@ class TerzaghiMonitor:
             self.settlement_error = e
             self.settlement_at_max = tv
 
+    def state(self) -> dict:
+        """What a checkpoint must carry to continue the error bookkeeping."""
+        return {"pressure_errors": self.pressure_errors,
+                "settlement_error": self.settlement_error,
+                "settlement_at_max": self.settlement_at_max}
+
+    def restore(self, state: dict) -> None:
+        self.pressure_errors = dict(state["pressure_errors"])
+        self.settlement_error = state["settlement_error"]
+        self.settlement_at_max = state["settlement_at_max"]
+
     def errors(self) -> dict:
         return {
             "reference": "terzaghi",
