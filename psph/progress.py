@@ -20,7 +20,8 @@ class Progress:
         if self.tty:
             from tqdm import tqdm
 
-            self.bar = tqdm(total=end_time, initial=start_time, unit="s", unit_scale=False, file=sys.stderr,
+            self.bar = tqdm(total=end_time, initial=start_time, unit="s", unit_scale=False,
+                            file=sys.stderr,
                             bar_format="{l_bar}{bar}| t={n:.4g}/{total:.4g} s "
                                        "[{elapsed}<{remaining}] {postfix}")
 

@@ -18,7 +18,6 @@ from psph.solver import Simulation
 from psph.verify import reference_times
 from psph.verify.errors import TerzaghiMonitor
 
-
 CONTROL_EVERY = 20  # steps between the collective checks (failure, stop signal, wall clock)
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGUSR1)
 

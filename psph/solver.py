@@ -1,9 +1,10 @@
 """Builds the step pipeline once from the scene and runs the time loop.
 
 Per step: [rebalance every K] -> exchange (migration + halo) -> ghosts (walls) ->
-neighbours (cell lists) -> interactions (fused pair sums) -> update (Eq. 22-27, 38-45). Outputs, diagnostics and
-progress are scheduled callbacks of the loop; every decision that changes control flow
-comes from a collective or from values identical on all ranks (time, step).
+neighbours (cell lists) -> interactions (fused pair sums) -> update (Eq. 22-27, 38-45).
+Outputs, diagnostics and progress are scheduled callbacks of the loop; every decision
+that changes control flow comes from a collective or from values identical on all ranks
+(time, step).
 """
 
 import time

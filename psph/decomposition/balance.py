@@ -9,7 +9,6 @@ import numpy as np
 from mpi4py import MPI
 
 
-
 def balanced_cuts(comm, coord: np.ndarray, min_width: float, iterations: int = 60
                   ) -> np.ndarray:
     """Cuts (size + 1,) so that each rank owns about the same number of particles.
