@@ -83,6 +83,12 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False,
     """Run `scene` into `out` (collective), from t = 0 or from the checkpoint `restart`.
     Returns the summary dict (on every rank). Raises Interrupted after a stop signal
     (the checkpoint is written first), NumericalError on a numerical failure."""
+    with StopRequest() as stop:  # from the start: a signal during set-up is kept too
+        return _run(scene, out, comm, quiet, restart, stop)
+
+
+def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
+         stop: StopRequest) -> dict:
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD if comm is None else comm
@@ -167,45 +173,44 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False,
             checkpoint()
         return bool(flags[1])
 
-    with StopRequest() as stop:
-        try:
-            if meta is None:
-                snapshot()
-                pending.pop(0)
-                diagnostics()
-                next_hist += scene.output.history_interval
-            while sim.t < end * (1 - 1e-12):
-                sim.advance_one()
-                if sim.step % CONTROL_EVERY == 0 and control():
-                    checkpoint()
-                    _finish(sim, slabs, out, history, setup_seconds,
-                            time.perf_counter() - loop0, monitor, "interrupted")
-                    signame = signal.Signals(
-                        comm.allreduce(stop.signal or 0, op=MPI.MAX)).name
-                    raise Interrupted(
-                        f"stopped by {signame} at step {sim.step}, t = {sim.t:.6g} s; "
-                        f"checkpoint written: continue with --restart {ck_path}")
-                if ck.every and sim.step % ck.every == 0:
-                    checkpoint()
-                if sim.t >= next_hist:
-                    sim.check_failure()
-                    diagnostics()
-                    while next_hist <= sim.t:
-                        next_hist += scene.output.history_interval
-                while pending and sim.t >= pending[0] * (1 - 1e-12):
-                    pending.pop(0)
-                    sim.check_failure()
-                    snapshot()
-                if sim.step % 32 == 0:
-                    progress.update(sim.t, sim.step)
-            sim.check_failure()
-            if pending:
-                snapshot()
-            if ck.at_end:
+    try:
+        if meta is None:
+            snapshot()
+            pending.pop(0)
+            diagnostics()
+            next_hist += scene.output.history_interval
+        while sim.t < end * (1 - 1e-12):
+            sim.advance_one()
+            if sim.step % CONTROL_EVERY == 0 and control():
                 checkpoint()
-        finally:
-            progress.close()
-            writer.close()
+                _finish(sim, slabs, out, history, setup_seconds,
+                        time.perf_counter() - loop0, monitor, "interrupted")
+                signame = signal.Signals(
+                    comm.allreduce(stop.signal or 0, op=MPI.MAX)).name
+                raise Interrupted(
+                    f"stopped by {signame} at step {sim.step}, t = {sim.t:.6g} s; "
+                    f"checkpoint written: continue with --restart {ck_path}")
+            if ck.every and sim.step % ck.every == 0:
+                checkpoint()
+            if sim.t >= next_hist:
+                sim.check_failure()
+                diagnostics()
+                while next_hist <= sim.t:
+                    next_hist += scene.output.history_interval
+            while pending and sim.t >= pending[0] * (1 - 1e-12):
+                pending.pop(0)
+                sim.check_failure()
+                snapshot()
+            if sim.step % 32 == 0:
+                progress.update(sim.t, sim.step)
+        sim.check_failure()
+        if pending:
+            snapshot()
+        if ck.at_end:
+            checkpoint()
+    finally:
+        progress.close()
+        writer.close()
 
     return _finish(sim, slabs, out, history, setup_seconds, time.perf_counter() - loop0,
                    monitor, "finished", restart)

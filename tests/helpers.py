@@ -60,3 +60,64 @@ def shared_tmp(comm, tmp_path_factory) -> Path:
     """One temporary directory, made by rank 0 and known to every rank."""
     path = str(tmp_path_factory.mktemp("mpi")) if comm.Get_rank() == 0 else None
     return Path(comm.bcast(path, root=0))
+
+
+FALLING_BLOCK = """
+name = "falling_far"
+description = "a dry elastic block falls through the whole slab layout onto the floor"
+gravity = [0.0, -9.81]
+[domain]
+min = [0.0, 0.0]
+max = [0.3, 2.0]
+[particles]
+dx = 0.01
+[[particles.blocks]]
+min = [0.0, 0.7]
+max = [0.3, 1.3]
+[material]
+E = 5.0e6
+nu = 0.3
+porosity = 0.4
+rho_s = 2000.0
+k = 1.0e-3
+[boundaries]
+left = { motion = "slip" }
+right = { motion = "slip" }
+bottom = { motion = "fixed" }
+[pressure]
+scheme = "none"
+[time]
+end = 0.4
+[output]
+interval = 0.05
+"""
+
+
+def falling_far(tmp: Path) -> Path:
+    """A dry block that falls through the whole slab layout: on 2 ranks every particle
+    ends below the first cut (migration), and the upper rank runs empty unless the slabs
+    are recut (load imbalance)."""
+    f = tmp / "falling_far.toml"
+    f.write_text(FALLING_BLOCK)
+    return f
+
+
+def compare_runs(path_one: Path, path_two: Path, last_only: bool = False):
+    """None if two particles.h5 hold bitwise-equal snapshots (by id), else what differs."""
+    from psph.io.snapshots import read_snapshots
+
+    one = read_snapshots(path_one)
+    two = read_snapshots(path_two)
+    if last_only:
+        one, two = one[-1:], two[-1:]
+    if [s["step"] for s in one] != [s["step"] for s in two]:
+        return (f"different snapshot steps {[s['step'] for s in one]} "
+                f"vs {[s['step'] for s in two]}")
+    for a, b in zip(one, two, strict=True):
+        if not np.array_equal(a["id"], b["id"]):  # every particle exactly once
+            return f"ids differ at step {a['step']}"
+        for field in ("x", "u", "v", "p", "n", "stress"):
+            if not np.array_equal(a[field], b[field]):
+                diff = np.max(np.abs(a[field] - b[field]))
+                return f"{field} differs at step {a['step']} (max abs diff {diff:.3e})"
+    return None

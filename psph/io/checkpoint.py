@@ -16,6 +16,7 @@ import numpy as np
 
 import psph
 from psph.errors import SceneError
+from psph.io.snapshots import write_rows
 from psph.particles import FIELDS
 
 FORMAT = "psph-checkpoint-1"
@@ -39,8 +40,7 @@ def write_checkpoint(path: Path, comm, store, meta: dict, history: list[dict] | 
         for fld in FIELDS:
             a = store.arrays[fld.name]
             d = g.create_dataset(fld.name, shape=(total,) + a.shape[1:], dtype=a.dtype)
-            with d.collective:
-                d[start:start + n_local] = a[:n_local]
+            write_rows(d, start, a[:n_local])
         text = np.frombuffer(json.dumps(history or []).encode(), np.uint8) \
             if comm.Get_rank() == 0 else None
         size = comm.bcast(len(text) if text is not None else 0, root=0)

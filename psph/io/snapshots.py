@@ -39,6 +39,24 @@ def snapshot_arrays(store) -> dict[str, np.ndarray]:
     }
 
 
+def write_rows(dset, start: int, a: np.ndarray) -> None:
+    """Collective write of rows start..start+len(a) of `dset` from every rank. A rank with
+    no rows still takes part (h5py's slicing would skip the call and hang the others)."""
+    fspace = dset.id.get_space()
+    if len(a):
+        count = a.shape
+        fspace.select_hyperslab((start,) + (0,) * (a.ndim - 1), count)
+        mspace = h5py.h5s.create_simple(count)
+        buf = np.ascontiguousarray(a)
+    else:
+        fspace.select_none()
+        mspace = h5py.h5s.create_simple((1,) + a.shape[1:])
+        mspace.select_none()
+        buf = np.zeros((1,) + a.shape[1:], a.dtype)
+    with dset.collective:
+        dset.id.write(mspace, fspace, buf, dxpl=dset._dxpl)
+
+
 class SnapshotWriter:
     """`OUT/particles.h5`, opened collectively once; `write` is collective.
 
@@ -84,8 +102,7 @@ class SnapshotWriter:
             shape = (total,) + a.shape[1:]
             d = g.create_dataset(key, shape=shape, dtype=a.dtype)
             d.attrs["unit"], d.attrs["description"] = SNAPSHOT_FIELDS[key]
-            with d.collective:
-                d[start:start + n_local] = a
+            write_rows(d, start, a)
         self.f.flush()
         self.entries.append((name, t, total))
 
