@@ -22,8 +22,8 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
-.PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability lint \
-	clean-env
+.PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability \
+	bench-scaling bench-ranks lint clean-env
 
 env: $(STAMP)
 
@@ -70,6 +70,14 @@ bench-time-vs-error: env
 
 bench-stability: env
 	$(VPY) bench/stability.py
+
+# strong (20k, 100k, 400k) and weak scaling 1 -> 2 ranks
+bench-scaling: env
+	$(VPY) bench/scaling.py
+
+# the same scenes on 1, 2, 3 and 4 ranks compared field by field
+bench-ranks: env
+	$(VPY) bench/rank_invariance.py
 
 lint: env
 	$(VENV)/bin/ruff check psph tests bench
