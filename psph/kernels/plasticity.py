@@ -1,0 +1,111 @@
+"""Drucker-Prager strain-softening plasticity (Section 2.2), plane strain, per particle.
+
+Stress components (xx, yy, zz, xy), effective, tension positive. Yield function Eq. (14)
+f = xi_phi I1 + sqrt(J2) - kappa_c and plastic potential Eq. (15) g = xi_psi I1 +
+sqrt(J2), with the plane-strain constants of Eq. (16) and the softening laws of
+Eq. (17)-(19) in the equivalent plastic strain. The return mapping is the semi-implicit
+one of Bui et al. (2008) (the paper's ref. [3]): one plastic corrector with the multiplier
+of Eq. (13), then the tension-cracking treatment at the apex and the scaling back of the
+deviator onto the surface, so that no state ends outside it and none is NaN.
+"""
+
+import math
+
+import numba as nb
+
+
+@nb.njit(cache=True, inline="always")
+def dp_constants(phi, c):
+    """(xi, kappa) of Eq. (16) for friction angle phi (rad) and cohesion c (Pa)."""
+    t = math.tan(phi)
+    d = math.sqrt(9.0 + 12.0 * t * t)
+    return t / d, 3.0 * c / d
+
+
+@nb.njit(cache=True, inline="always")
+def softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f):
+    """(phi, c, psi) after softening, Eq. (17)-(19)."""
+    decay = math.exp(-eta * eps_p)
+    return (phi_r + (phi_p - phi_r) * decay, c_r + (c_p - c_r) * decay,
+            psi0 * math.exp(-s_f * eps_p))
+
+
+@nb.njit(cache=True, inline="always")
+def _invariants(sxx, syy, szz, sxy):
+    i1 = sxx + syy + szz
+    m = i1 / 3.0
+    dxx = sxx - m
+    dyy = syy - m
+    dzz = szz - m
+    j2 = 0.5 * (dxx * dxx + dyy * dyy + dzz * dzz) + sxy * sxy
+    return i1, dxx, dyy, dzz, j2
+
+
+@nb.njit(cache=True)
+def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
+              s_f):
+    """Return the trial stress to the Drucker-Prager surface.
+
+    Returns (sxx, syy, szz, sxy, d_lambda, d_eps_p): the corrected stress, the plastic
+    multiplier of Eq. (13) and the increment of the equivalent plastic strain
+    d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain = d_lambda / sqrt(3).
+    A trial state with f <= 0 is returned unchanged (d_lambda = 0).
+
+    Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
+    with the sign that keeps f = 0 to first order after the update (softening makes
+    df/d eps_p > 0 and enlarges d_lambda); the denominator is kept positive.
+    """
+    phi, c, psi = softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+    xi, kap = dp_constants(phi, c)
+    xi_psi = dp_constants(psi, 0.0)[0]
+    i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy)
+    rj2 = math.sqrt(j2)
+    f = xi * i1 + rj2 - kap
+    if not f > 0.0:
+        return sxx, syy, szz, sxy, 0.0, 0.0
+    d_lam = 0.0
+    if rj2 > 1e-12 * (abs(i1) + kap + 1.0):
+        # df/d eps_p of the softened surface: d(xi)/d eps I1 - d(kappa)/d eps
+        decay = math.exp(-eta * eps_p)
+        dphi = -eta * (phi_p - phi_r) * decay
+        dc = -eta * (c_p - c_r) * decay
+        t = math.tan(phi)
+        d = math.sqrt(9.0 + 12.0 * t * t)
+        dt_dphi = 1.0 + t * t
+        dxi = dt_dphi * dphi * (1.0 / d - 12.0 * t * t / (d * d * d))
+        dkap = 3.0 * dc / d - 3.0 * c * 12.0 * t * dt_dphi * dphi / (d * d * d)
+        dfde = dxi * i1 - dkap
+        elastic = 9.0 * bulk * xi * xi_psi + shear
+        denom = elastic - dfde / math.sqrt(3.0)
+        if denom < 0.1 * elastic:
+            denom = 0.1 * elastic
+        d_lam = f / denom
+        shift = d_lam * 3.0 * bulk * xi_psi
+        scale = d_lam * shear / rj2
+        sxx = sxx - shift - scale * dxx
+        syy = syy - shift - scale * dyy
+        szz = szz - shift - scale * dzz
+        sxy = sxy - scale * sxy
+    d_eps = d_lam / math.sqrt(3.0)
+    # the surface at the updated plastic strain
+    phi, c, psi = softened(eps_p + d_eps, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+    xi, kap = dp_constants(phi, c)
+    i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy)
+    # tension cracking: beyond the apex I1 = kappa / xi, move the mean stress back to it
+    if xi > 0.0 and xi * i1 > kap:
+        shift = (i1 - kap / xi) / 3.0
+        sxx -= shift
+        syy -= shift
+        szz -= shift
+        i1 = kap / xi
+    # scaling back: a deviator still outside the surface is scaled onto it
+    room = kap - xi * i1
+    rj2 = math.sqrt(j2)
+    if rj2 > room:
+        r = room / rj2 if rj2 > 0.0 and room > 0.0 else 0.0
+        m = i1 / 3.0
+        sxx = m + r * dxx
+        syy = m + r * dyy
+        szz = m + r * dzz
+        sxy = r * sxy
+    return sxx, syy, szz, sxy, d_lam, d_eps

@@ -1,0 +1,117 @@
+"""Drucker-Prager return mapping (Eq. 13-19): lands on the yield surface, agrees with the
+multiplier of Eq. (13), leaves elastic states alone, softens to the residual values, and
+keeps apex / tension states finite."""
+
+import math
+
+import numpy as np
+import pytest
+
+from psph.kernels.plasticity import dp_constants, dp_return, softened
+
+E, NU = 20e6, 0.3
+K = E / (3 * (1 - 2 * NU))
+G = E / (2 * (1 + NU))
+PHI, C = math.radians(30.0), 5e3
+
+
+def f_of(s, phi, c):
+    xi, kap = dp_constants(phi, c)
+    i1 = s[0] + s[1] + s[2]
+    d = np.array(s[:3]) - i1 / 3
+    j2 = 0.5 * np.sum(d * d) + s[3] ** 2
+    return xi * i1 + math.sqrt(j2) - kap
+
+
+def ret(s, eps=0.0, phi_p=PHI, phi_r=PHI, c_p=C, c_r=C, psi0=0.0, eta=0.0, s_f=0.0):
+    return dp_return(*s, eps, K, G, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+
+
+def test_plane_strain_constants_eq16():
+    xi, kap = dp_constants(math.radians(30), 1e4)
+    t = math.tan(math.radians(30))
+    assert xi == pytest.approx(t / math.sqrt(9 + 12 * t * t))
+    assert kap == pytest.approx(3e4 / math.sqrt(9 + 12 * t * t))
+
+
+def test_elastic_state_untouched():
+    s = (-50e3, -80e3, -40e3, 5e3)
+    assert f_of(s, PHI, C) < 0
+    out = ret(s)
+    assert out[:4] == s and out[4] == 0.0 and out[5] == 0.0
+
+
+@pytest.mark.parametrize("psi_deg", [30.0, 10.0, 0.0])
+def test_return_lands_on_the_surface_with_the_eq13_multiplier(psi_deg):
+    s = (-50e3, -120e3, -60e3, 40e3)  # a big deviator: outside
+    f_trial = f_of(s, PHI, C)
+    assert f_trial > 1e3
+    psi = math.radians(psi_deg)
+    out = ret(s, psi0=psi)
+    assert abs(f_of(out[:4], PHI, C)) < 1e-9 * 1e5
+    xi_phi = dp_constants(PHI, C)[0]
+    xi_psi = dp_constants(psi, 0.0)[0]
+    d_lam = f_trial / (9 * K * xi_phi * xi_psi + G)  # Eq. (13), no softening
+    assert out[4] == pytest.approx(d_lam, rel=1e-12)
+    assert out[5] == pytest.approx(d_lam / math.sqrt(3), rel=1e-12)
+    # plastic flow along dg/dsigma (Eq. 12, 15): volumetric part 3 K xi_psi d_lam
+    i1_trial, i1_out = sum(s[:3]), sum(out[:3])
+    assert i1_trial - i1_out == pytest.approx(9 * K * xi_psi * d_lam, rel=1e-9, abs=1e-6)
+
+
+def test_return_with_softening_ends_on_the_softened_surface():
+    phi_r, c_r, eta = math.radians(20.0), 1e3, 30.0
+    s = (-50e3, -120e3, -60e3, 40e3)
+    eps0 = 0.01
+    out = ret(s, eps=eps0, phi_r=phi_r, c_r=c_r, eta=eta, psi0=math.radians(5), s_f=10.0)
+    phi, c, _ = softened(eps0 + out[5], PHI, phi_r, C, c_r, math.radians(5), eta, 10.0)
+    f_after = f_of(out[:4], phi, c)
+    assert out[5] > 0
+    assert f_after <= 1e-9 * 1e5  # never outside
+    assert abs(f_after) < 0.02 * f_of(s, PHI, C)  # first-order consistent (Eq. 13)
+
+
+def test_softening_laws_reach_residual_values():
+    phi_p, phi_r, c_p, c_r, psi0 = 0.6, 0.3, 1e4, 1e3, 0.1
+    assert softened(0.0, phi_p, phi_r, c_p, c_r, psi0, 20.0, 5.0) == (phi_p, c_p, psi0)
+    phi, c, psi = softened(50.0, phi_p, phi_r, c_p, c_r, psi0, 20.0, 5.0)
+    assert phi == pytest.approx(phi_r) and c == pytest.approx(c_r) and psi < 1e-100
+    a = softened(0.01, phi_p, phi_r, c_p, c_r, psi0, 20.0, 5.0)
+    b = softened(0.02, phi_p, phi_r, c_p, c_r, psi0, 20.0, 5.0)
+    assert phi_p > a[0] > b[0] > phi_r and c_p > a[1] > b[1] > c_r  # monotone
+
+
+@pytest.mark.parametrize("s", [(1e6, 1e6, 1e6, 0.0), (1e9, -1e3, 2e8, 5e8),
+                               (0.0, 0.0, 0.0, 1e12), (1e300, 1e300, 1e300, 0.0)])
+def test_apex_and_tension_states_are_finite_and_not_outside(s):
+    out = ret(s)
+    assert all(math.isfinite(v) for v in out)
+    xi, kap = dp_constants(PHI, C)
+    assert f_of(out[:4], PHI, C) <= 1e-9 * max(1.0, abs(sum(out[:3])))
+    assert sum(out[:3]) <= kap / xi * (1 + 1e-12)
+
+
+def test_cohesionless_material_at_zero_stress_stays_finite():
+    out = dp_return(0.0, 0.0, 0.0, 10.0, 0.0, K, G, PHI, PHI, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert all(math.isfinite(v) for v in out)
+    assert out[:4] == pytest.approx((0.0, 0.0, 0.0, 0.0), abs=1e-9)
+
+
+def test_random_states_never_end_outside():
+    rng = np.random.default_rng(7)
+    law = (PHI, math.radians(22), C, 500.0, math.radians(5), 15.0, 8.0)
+    inside = outside = 0
+    for s in rng.normal(0.0, 1e5, (2000, 4)) + np.array([-2e5, -2e5, -2e5, 0.0]):
+        s = tuple(float(v) for v in s)
+        eps = float(rng.uniform(0, 0.2))
+        out = dp_return(*s, eps, K, G, *law)
+        assert all(math.isfinite(v) for v in out) and out[5] >= 0.0
+        phi0, c0, _ = softened(eps, *law)
+        phi1, c1, _ = softened(eps + out[5], *law)
+        if f_of(s, phi0, c0) <= 0.0:
+            inside += 1
+            assert out[:4] == s and out[5] == 0.0
+        else:
+            outside += 1
+            assert f_of(out[:4], phi1, c1) <= 1e-9 * max(1e5, abs(sum(out[:3])))
+    assert inside > 100 and outside > 100
