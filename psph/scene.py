@@ -44,10 +44,25 @@ class Particles(_Model):
     blocks: Annotated[list[Block], Field(min_length=1)]
 
 
-class Material(_Model):
-    """Linear elastic saturated soil (Section 4.1 units: Pa, kg/m^3, m/s)."""
+class Plasticity(_Model):
+    """Drucker-Prager strain softening, Eq. (14)-(19). Angles in degrees, cohesion in Pa;
+    residual values default to the peak ones (no softening)."""
 
-    model: Literal["elastic"] = "elastic"
+    phi: Annotated[float, Field(ge=0.0, lt=90.0)]  # peak friction angle phi_p
+    phi_r: Annotated[float, Field(ge=0.0, lt=90.0)] | None = None  # residual, Eq. (17)
+    c: Annotated[float, Field(ge=0.0)] = 0.0  # peak cohesion c_p
+    c_r: Annotated[float, Field(ge=0.0)] | None = None  # residual, Eq. (18)
+    psi: Annotated[float, Field(gt=-90.0, lt=90.0)] = 0.0  # initial dilation psi_0, Eq. (19)
+    eta: Annotated[float, Field(ge=0.0)] = 0.0  # softening rate of phi and c, Eq. (17)-(18)
+    s_f: Annotated[float, Field(ge=0.0)] = 0.0  # decay rate of dilation, Eq. (19)
+
+
+class Material(_Model):
+    """Saturated soil, linear elastic or elastic-plastic (Section 2.2; units Pa, kg/m^3,
+    m/s)."""
+
+    model: Literal["elastic", "drucker_prager"] = "elastic"
+    plasticity: Plasticity | None = None  # required for model = "drucker_prager"
     E: Pos
     nu: Annotated[float, Field(gt=-1.0, lt=0.5)]
     porosity: Annotated[float, Field(gt=0.0, lt=1.0)]
@@ -124,6 +139,14 @@ class Verification(_Model):
     tv: list[Pos] = []  # time factors T_v at which to snapshot and compare
 
 
+class Initial(_Model):
+    """In-situ state at t = 0 (Section 4.4-4.5): hydrostatic pore pressure below a water
+    table, and the K0 procedure for the effective stress under gravity."""
+
+    water_table: float | None = None  # m (elevation y); p = rho_l |g| (y_wt - y) below it
+    k0: Annotated[float, Field(gt=0.0)] | None = None  # sigma'_h = K0 sigma'_v; none: zero
+
+
 class Decomposition(_Model):
     axis: Literal["auto", "x", "y"] = "auto"
     # every this many steps the work imbalance (max/mean particles per rank) is measured;
@@ -156,6 +179,7 @@ class Scene(_Model):
     stabilisation: Stabilisation = Stabilisation()
     output: Output = Output()
     verification: Verification = Verification()
+    initial: Initial = Initial()
     decomposition: Decomposition = Decomposition()
     checkpoint: Checkpoint = Checkpoint()
 
@@ -176,6 +200,17 @@ class Scene(_Model):
                 if b.max[d] > hi[d] + 1e-12:
                     raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
                                 f"particles outside the walls (domain.max[{d}] = {hi[d]})")
+        if self.material.model == "drucker_prager" and self.material.plasticity is None:
+            raise _Rule("material.plasticity", None,
+                        "required for material.model = 'drucker_prager' (at least phi)")
+        if self.material.model == "elastic" and self.material.plasticity is not None:
+            raise _Rule("material.model", "elastic",
+                        "material.plasticity is given: set model = 'drucker_prager'")
+        if (self.initial.k0 is not None or self.initial.water_table is not None) \
+                and self.gravity[1] >= 0.0:
+            key = "initial.k0" if self.initial.k0 is not None else "initial.water_table"
+            raise _Rule(key, getattr(self.initial, key.split(".")[1]),
+                        f"needs gravity along -y (gravity = {self.gravity})")
         for name, pt in self.output.probes.items():
             for d in range(2):
                 if not lo[d] <= pt[d] <= hi[d]:

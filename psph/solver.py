@@ -21,7 +21,7 @@ from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advanc
 from psph.particles import ParticleStore
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
-from psph.physics.material import soil_from_scene
+from psph.physics.material import plasticity_parameters, soil_from_scene
 from psph.scene import Scene, fluid_dt_limit, solid_dt_limit
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
@@ -124,8 +124,12 @@ class Simulation:
 
         g = scene.gravity
         self.body = (float(g[0]), float(g[1]))
+        self.head_b = self.soil.rho_l * np.array(self.body) if scene.pressure.scheme != "none" \
+            else np.zeros(2)
         self.damping = self.soil.damping_coefficient(scene.stabilisation.damping, self.h)
         self.coupled = scene.pressure.scheme != "none"
+        self.plastic = scene.material.model == "drucker_prager"
+        self.dp = plasticity_parameters(scene)
         self.acc_term = self.coupled and scene.pressure.acceleration_term
         self.dt, self.scheme = self.stepping.at(0.0)
         self.bad_particle = -1
@@ -157,7 +161,8 @@ class Simulation:
                  SCHEME_TPI: "tpi"}[self.stepping.scheme_main]
         if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
             pname = "explicit->tpi"
-        stages.append(Stage(f"update[{pname}]", self._update))
+        model = ",drucker_prager" if self.plastic else ",elastic"
+        stages.append(Stage(f"update[{pname}{model}]", self._update))
         return stages
 
     def _reset_halo(self) -> None:
@@ -176,7 +181,7 @@ class Simulation:
             ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_global),
                              self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
                              st.x, st.v, st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho,
-                             st.perm, st.acc, st.key)
+                             st.perm, st.acc, st.key, self.head_b)
             if ng >= 0:
                 st.n_ghost = ng
                 return
@@ -235,7 +240,8 @@ class Simulation:
                       s.lam, s.shear, s.K_l, s.gamma_l, s.rho_l, s.rho_s, self.body[0],
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
-                      self.scene.stabilisation.corrected_strain_rate, self.box)
+                      self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
+                      self.dp, st.eps_p)
         if bad >= 0 and self.failure is None:
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

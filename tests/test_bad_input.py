@@ -42,6 +42,16 @@ CASES = [
     (["--set", "verification.reference='nope'"], ["verification.reference", "nope"]),
     (["--set", "time.dt=1e-4"], ["time.dt", "0.0001", "solid limit Eq. (41)"]),
     (["--set", "boundaries.top.motion='sticky'"], ["boundaries.top.motion", "sticky"]),
+    (["--set", "material.model='drucker_prager'"], ["material.plasticity", "required"]),
+    (["--set", "material.plasticity.phi=95.0"], ["material.plasticity.phi", "95",
+                                                 "less than 90"]),
+    (["--set", "material.plasticity.phi=30.0"], ["material.model", "drucker_prager"]),
+    (["--set", "initial.k0=0.5"], ["initial.k0", "gravity"]),
+    (["--set", "initial.k0=-0.5"], ["initial.k0", "greater than 0"]),
+    (["--set", "checkpoint.every=-1"], ["checkpoint.every", "-1"]),
+    (["--set", "decomposition.imbalance_threshold=0.9"],
+     ["decomposition.imbalance_threshold", "0.9", "greater than 1"]),
+    (["--set", "decomposition.rebalance_every=1.5"], ["decomposition.rebalance_every"]),
 ]
 
 
@@ -105,7 +115,7 @@ def test_list_names_builtin_scenes():
     r = run_cli("list")
     assert r.returncode == 0
     names = [line.split()[0] for line in r.stdout.splitlines()]
-    assert names == ["harmonic", "strip_footing", "terzaghi"]
+    assert names == ["geostatic_column", "harmonic", "strip_footing", "terzaghi"]
 
 
 def test_set_override_reaches_resolved_scene(tmp_path):

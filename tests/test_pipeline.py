@@ -20,13 +20,16 @@ def _stages(overrides):
 
 
 @pytest.mark.parametrize("overrides, present, absent", [
-    (["pressure.scheme='explicit'"], ["update[explicit]", "interactions[momentum,pressure]"],
-     ["tpi", "shepard", "exchange"]),
-    (["pressure.explicit_until=0.0"], ["update[tpi]"], ["explicit", "shepard"]),
-    ([], ["update[explicit->tpi]"], ["shepard"]),
+    (["pressure.scheme='explicit'"],
+     ["update[explicit,elastic]", "interactions[momentum,pressure]"],
+     ["tpi", "shepard", "exchange", "drucker_prager", "rebalance"]),
+    (["pressure.explicit_until=0.0"], ["update[tpi,elastic]"], ["explicit", "shepard"]),
+    ([], ["update[explicit->tpi,elastic]"], ["shepard"]),
     (["stabilisation.shepard_every=20"], ["shepard[every 20]"], []),
     (["pressure.scheme='none'", "stabilisation.shepard_every=20"],
-     ["interactions[momentum]", "update[dry]"], ["pressure", "shepard"]),
+     ["interactions[momentum]", "update[dry,elastic]"], ["pressure", "shepard"]),
+    (["material.model='drucker_prager'", "material.plasticity.phi=30.0"],
+     ["update[explicit->tpi,drucker_prager]"], ["elastic"]),
     (["boundaries.left.motion='free'", "boundaries.right.motion='free'",
       "boundaries.bottom.motion='free'"], [], ["ghosts"]),
 ])
@@ -46,7 +49,7 @@ def test_summary_lists_stages_and_times(tmp_path):
     run(scene, tmp_path, comm=MPI.COMM_SELF, quiet=True)
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["stages_run"] == ["reset_halo", "ghosts", "neighbours", "shepard[every 4]",
-                               "interactions[momentum,pressure]", "update[explicit->tpi]"]
+                               "interactions[momentum,pressure]", "update[explicit->tpi,elastic]"]
     assert set(s["stage_seconds"]) == set(s["stages_run"])
     steps = s["steps"]
     assert s["stage_seconds"]["neighbours"]["calls"] == steps

@@ -4,9 +4,11 @@ A wall is a plane x[axis] = pos with the soil on the side `sign` (+1: soil at la
 Ghosts mirror the real particles (owned and halo) within `reach` (= 2h) of a wall: position
 mirrored; velocity and acceleration with the normal component reversed (free slip) or both
 reversed (fixed, no slip); effective stress mirrored (shear component reversed on a
-free-slip wall, kept on a fixed one so that the wall resists tangential motion); pressure,
-porosity, volume, density and permeability copied, so a wall is impermeable. Particles near
-two walls of different axes also get a corner ghost mirrored across both.
+free-slip wall, kept on a fixed one so that the wall resists tangential motion); porosity,
+volume, density and permeability copied; pore pressure copied plus the hydrostatic
+difference rho_l b.(x_ghost - x_real), so that the total head p + psi of Eq. (25) is
+mirrored and a wall is impermeable also under gravity. Particles near two walls of
+different axes also get a corner ghost mirrored across both.
 """
 
 import numba as nb
@@ -14,7 +16,7 @@ import numba as nb
 
 @nb.njit(cache=True)
 def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
-            key):
+            key, head_b):
     x[dst, 0] = x[src, 0]
     x[dst, 1] = x[src, 1]
     x[dst, axis] = 2.0 * pos - x[src, axis]
@@ -31,8 +33,9 @@ def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho,
     # free slip: shear reversed, so a real-ghost pair carries no shear traction; fixed:
     # shear kept, so the wall's shear reaction resists sliding along it
     stress[dst, 3] = stress[src, 3] if fixed else -stress[src, 3]
-    p[dst] = p[src]
-    p_prev[dst] = p_prev[src]
+    dp = head_b[0] * (x[dst, 0] - x[src, 0]) + head_b[1] * (x[dst, 1] - x[src, 1])
+    p[dst] = p[src] + dp
+    p_prev[dst] = p_prev[src] + dp
     poro[dst] = poro[src]
     vol[dst] = vol[src]
     rho[dst] = rho[src]
@@ -42,10 +45,11 @@ def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho,
 
 @nb.njit(cache=True)
 def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
-                x, v, stress, p, p_prev, poro, vol, rho, perm, acc, key):
+                x, v, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b):
     """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
     or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
-    per wall / corner, so the neighbour order is the same on any number of ranks."""
+    per wall / corner, so the neighbour order is the same on any number of ranks.
+    head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift."""
     nw = wall_axis.shape[0]
     g = n_real
     for j in range(n_real):
@@ -56,7 +60,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
             if g >= cap:
                 return -1
             _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], x, v, stress, p, p_prev,
-                    poro, vol, rho, perm, acc, key)
+                    poro, vol, rho, perm, acc, key, head_b)
             key[g] = key[j] + key_stride * (1 + w)
             g += 1
             for w2 in range(w + 1, nw):
@@ -69,7 +73,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                     return -1
                 gg = g - 1
                 _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], x, v, stress, p,
-                        p_prev, poro, vol, rho, perm, acc, key)
+                        p_prev, poro, vol, rho, perm, acc, key, head_b)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 g += 1
     return g - n_real

@@ -9,6 +9,7 @@ porosity (Eq. 24), the pore pressure (explicit Eq. 25 or TPI Eq. 38-39), the vel
 import numba as nb
 
 from psph.kernels.interactions import NSUMS  # noqa: F401  (column layout documented there)
+from psph.kernels.plasticity import dp_return
 
 SCHEME_NONE = 0
 SCHEME_EXPLICIT = 1
@@ -41,7 +42,7 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, p_prev_i, alpha, beta, dt):
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
             bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box):
+            acc_term, correct_strain, box, plastic, dp, eps_p):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
@@ -49,6 +50,9 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
     1 explicit Eq. (25), 2 TPI Eq. (38), with Eq. (47) for p < 0 when beta > 0 (alpha,
     beta: Eq. 39 and 47); p = 0 is imposed where drained_from <= t.
+    plastic: the elastic trial stress is returned to the Drucker-Prager surface with the
+    parameters dp = (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) (Eq. 13-19) and eps_p
+    accumulates the equivalent plastic strain.
     """
     bad = -1
     inv_g = rho_l / gamma_l
@@ -79,6 +83,15 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         stress[i, 1] = syy + dt * (lam * l00 + (lam + 2.0 * shear) * l11 - 2.0 * w * sxy)
         stress[i, 2] += dt * lam * (l00 + l11)
         stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
+        if plastic:
+            r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_p[i],
+                          lam + 2.0 * shear / 3.0, shear, dp[0], dp[1], dp[2], dp[3], dp[4],
+                          dp[5], dp[6])
+            stress[i, 0] = r[0]
+            stress[i, 1] = r[1]
+            stress[i, 2] = r[2]
+            stress[i, 3] = r[3]
+            eps_p[i] += r[5]
 
         if scheme != SCHEME_NONE:
             # porosity rate, Eq. (24): trace(Gn Minv)

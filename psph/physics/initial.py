@@ -47,4 +47,36 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
         data["load_index"][layer] = i
         data["traction"][layer] = -normal * dx  # pressure pushes inward over length dx
         data["surface"][layer] = 1.0
+    geostatic(scene, data)
     return data
+
+
+def geostatic(scene, data: dict[str, np.ndarray]) -> None:
+    """Hydrostatic pore pressure below `initial.water_table` and the K0 effective stress
+    (sigma'_v from the weight of the soil above, sigma'_h = sigma'_zz = K0 sigma'_v), in
+    place. The ground surface above a particle is the top of its particle column.
+
+    Total vertical stress sigma_v = -rho g d at depth d (tension positive), and Eq. (2)
+    sigma' = sigma + p I gives sigma'_v = -rho g d + p.
+    """
+    init = scene.initial
+    n = len(data["key"])
+    g = -scene.gravity[1]
+    x = data["x"]
+    if init.water_table is not None:
+        p = scene.material.rho_l * g * np.maximum(init.water_table - x[:, 1], 0.0)
+        p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0), 0.0, p)
+        data["p"] = p
+        data["p_prev"] = p.copy()
+    if init.k0 is not None:
+        dx = scene.particles.dx
+        column = np.round(x[:, 0] / dx).astype(np.int64)
+        top = np.full(column.max() - column.min() + 1, -np.inf)
+        np.maximum.at(top, column - column.min(), x[:, 1])
+        depth = top[column - column.min()] + 0.5 * dx - x[:, 1]
+        sigma_v = -data["rho"] * g * depth + data.get("p", np.zeros(n))
+        stress = np.zeros((n, 4))
+        stress[:, 0] = init.k0 * sigma_v
+        stress[:, 1] = sigma_v
+        stress[:, 2] = init.k0 * sigma_v
+        data["stress"] = stress

@@ -3,6 +3,8 @@
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class ElasticSoil:
@@ -40,6 +42,18 @@ class ElasticSoil:
     def mixture_density(self) -> float:
         n = self.porosity
         return (1 - n) * self.rho_s + n * self.rho_l
+
+
+def plasticity_parameters(scene) -> np.ndarray:
+    """(phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) for the kernels, angles in radians
+    (Eq. 17-19); zeros for an elastic material."""
+    pl = scene.material.plasticity
+    if pl is None:
+        return np.zeros(7)
+    phi_r = pl.phi if pl.phi_r is None else pl.phi_r
+    c_r = pl.c if pl.c_r is None else pl.c_r
+    return np.array([math.radians(pl.phi), math.radians(phi_r), pl.c, c_r,
+                     math.radians(pl.psi), pl.eta, pl.s_f])
 
 
 def soil_from_scene(scene) -> ElasticSoil:
