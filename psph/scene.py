@@ -124,6 +124,10 @@ class Stabilisation(_Model):
     av_beta: Annotated[float, Field(ge=0.0)] = 0.1
     corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
     shepard_every: Annotated[int, Field(ge=0)] = 0  # m of Eq. (46): filter p every m steps
+    # artificial stress in C_ij of Eq. (26) (refs. [11, 18]): epsilon and exponent n;
+    # default epsilon: 0.5 for Drucker-Prager soil, 0 (off) for elastic
+    artificial_stress: Annotated[float, Field(ge=0.0)] | None = None
+    artificial_stress_n: Annotated[float, Field(gt=0.0)] = 2.55
 
 
 class Output(_Model):
@@ -358,7 +362,12 @@ def load_scene(source: str, overrides: list[str] | None = None) -> Scene:
 
 
 def resolve(scene: Scene) -> Scene:
-    """Fill values derived from others (end time from the verification times)."""
+    """Fill values derived from others (end time from the verification times, artificial
+    stress from the material model)."""
+    if scene.stabilisation.artificial_stress is None:
+        scene = scene.model_copy(deep=True)
+        scene.stabilisation.artificial_stress = \
+            0.5 if scene.material.model == "drucker_prager" else 0.0
     if scene.time.end is None:
         from psph.verify import reference_times
 

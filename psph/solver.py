@@ -13,10 +13,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from psph.errors import NumericalError
-from psph.kernels.ghosts import make_ghosts
+from psph.kernels.artificial_stress import artificial_stress
+from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import NSUMS, pair_sums
 from psph.kernels.neighbours import bin_particles, grid_bounds
 from psph.kernels.shepard import shepard_pressure
+from psph.kernels.spline import w_cubic
 from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance
 from psph.particles import ParticleStore
 from psph.physics.initial import initial_particles
@@ -119,6 +121,8 @@ class Simulation:
         self.cell_of = np.zeros(self.store.cap, np.int64)
         self.order = np.zeros(self.store.cap, np.int64)
         self.sums = np.zeros((self.store.cap, NSUMS))
+        self.astress = np.zeros((1, 3))
+        self.w_dx = w_cubic(scene.particles.dx, self.h)
         self.scratch = np.zeros((2, self.store.cap))
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
@@ -224,11 +228,17 @@ class Simulation:
         rl = self.soil.rho_l
         alpha = self.scene.pressure.alpha if self.scheme == SCHEME_TPI else 0.0
         sb = self.scene.stabilisation
+        as_n = 0.0
+        if sb.artificial_stress > 0.0:
+            if self.astress.shape[0] < st.cap:
+                self.astress = np.zeros((st.cap, 3))
+            artificial_stress(st.n_total, st.stress, st.p, sb.artificial_stress, self.astress)
+            as_n = sb.artificial_stress_n
         pair_sums(st.n_total, st.n_owned, st.x, st.v, st.stress, st.p, st.p_prev, st.poro,
                   st.vol, st.rho, st.perm, st.acc, self.cell_start, self.order, self.ncell,
                   self.h, alpha, sb.av_alpha, sb.av_beta, self.soil.sound_speed,
                   rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
-                  self.sums)
+                  self.sums, self.astress, as_n, self.w_dx)
 
     def _update(self) -> None:
         st = self.store
@@ -242,6 +252,9 @@ class Simulation:
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
                       self.dp, st.eps_p)
+        if len(self.wall_axis):
+            wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
+                         self.wall_sign)
         if bad >= 0 and self.failure is None:
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

@@ -47,7 +47,7 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
     sums = z((n, NSUMS))
     pair_sums(n, n if n_owned is None else n_owned, x, v, stress, p, p_prev, poro, vol, rho,
               perm, z((n, 2)), cell_start, order, ncell, h, alpha, 0.0, 0.0, 1.0, 0.0, 0.0,
-              coupled, False, sums)
+              coupled, False, sums, z((n, 3)), 0.0, 1.0)
     return sums
 
 

@@ -115,3 +115,24 @@ def test_random_states_never_end_outside():
             outside += 1
             assert f_of(out[:4], phi1, c1) <= 1e-9 * max(1e5, abs(sum(out[:3])))
     assert inside > 100 and outside > 100
+
+
+def _as(sxx, syy, sxy, p=0.0, eps=0.5):
+    from psph.kernels.artificial_stress import artificial_stress
+
+    out = np.zeros((1, 3))
+    artificial_stress(1, np.array([[sxx, syy, 0.0, sxy]]), np.array([p]), eps, out)
+    return out[0]
+
+
+def test_artificial_stress_acts_on_tension_only():
+    assert np.all(_as(-1e4, -2e4, 3e3) == 0.0)  # both principal stresses compressive
+    assert _as(1e4, -2e4, 0.0) == pytest.approx([-0.5e4, 0.0, 0.0])
+    assert _as(0.0, 0.0, 0.0, p=-3e3) == pytest.approx([-1.5e3, -1.5e3, 0.0])  # suction
+
+
+def test_artificial_stress_rotates_with_the_stress():
+    t, th = 2e4, 0.3  # uniaxial tension t along an axis at angle th
+    c, s = math.cos(th), math.sin(th)
+    r = _as(t * c * c, t * s * s, t * s * c)
+    assert r == pytest.approx([-0.5 * t * c * c, -0.5 * t * s * s, -0.5 * t * s * c])

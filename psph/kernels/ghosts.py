@@ -77,3 +77,24 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 g += 1
     return g - n_real
+
+
+@nb.njit(cache=True)
+def wall_contact(n_owned, x, v, u, wall_axis, wall_pos, wall_sign):
+    """No penetration: an owned particle found beyond a wall plane is reflected back into
+    the soil and loses its velocity into the wall. Ghost stresses keep particles off the
+    walls in compression; a particle in tension (at the Drucker-Prager apex, Eq. 14) is
+    pulled toward its own mirror image, and this stops it. Returns the number moved."""
+    moved = 0
+    for i in range(n_owned):
+        for w in range(wall_axis.shape[0]):
+            a = wall_axis[w]
+            d = wall_sign[w] * (x[i, a] - wall_pos[w])
+            if d < 0.0:
+                shift = -2.0 * d * wall_sign[w]
+                x[i, a] += shift
+                u[i, a] += shift
+                if wall_sign[w] * v[i, a] < 0.0:
+                    v[i, a] = 0.0
+                moved += 1
+    return moved

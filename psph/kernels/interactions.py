@@ -26,7 +26,7 @@ import math
 import numba as nb
 
 from psph.kernels.neighbours import half_stencil
-from psph.kernels.spline import dw_cubic
+from psph.kernels.spline import dw_cubic, w_cubic
 
 NSUMS = 25
 
@@ -34,11 +34,13 @@ NSUMS = 25
 @nb.njit(cache=True, error_model="numpy")
 def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
               cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
-              rho_l_b0, rho_l_b1, coupled, acc_term, sums):
+              rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx):
     """Accumulate the sums listed in the module docstring for particles 0..n_owned-1.
 
     coupled: pressure-related sums (Gp, Gn, Q, sA, sAp, sApsi) are computed;
     acc_term: the div(k dv/dt) sums (Ga) are computed. rho_l_b = rho_l * body force (N/m^3).
+    astress: (cap, 3) artificial stress R (xx, yy, xy) of every row, added to the pair
+    stress with weight (W(r) / w_dx)^as_n (C_ij of Eq. 26); as_n = 0 switches it off.
     """
     for i in range(n_owned):
         for c in range(NSUMS):
@@ -80,6 +82,11 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
                         sxx = stress[a, 0] + stress[b, 0] - p[a] - p[b]
                         syy = stress[a, 1] + stress[b, 1] - p[a] - p[b]
                         sxy = stress[a, 3] + stress[b, 3]
+                        if as_n > 0.0:
+                            fn = (w_cubic(r, h) / w_dx) ** as_n
+                            sxx += fn * (astress[a, 0] + astress[b, 0])
+                            syy += fn * (astress[a, 1] + astress[b, 1])
+                            sxy += fn * (astress[a, 2] + astress[b, 2])
                         f0 = sxx * g0 + sxy * g1
                         f1 = sxy * g0 + syy * g1
                         # artificial viscosity (Monaghan), part of C_ij in Eq. (26)
