@@ -23,7 +23,7 @@ DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability \
-	bench-scaling bench-ranks lint clean-env
+	bench-scaling bench-ranks bench-tpi-gravity lint clean-env
 
 env: $(STAMP)
 
@@ -74,6 +74,10 @@ bench-stability: env
 # strong (20k, 100k, 400k) and weak scaling 1 -> 2 ranks
 bench-scaling: env
 	$(VPY) bench/scaling.py
+
+# TPI stability of a column at rest under gravity, over alpha and dt gamma_l / (rho k)
+bench-tpi-gravity: env
+	$(VPY) bench/tpi_gravity.py
 
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env

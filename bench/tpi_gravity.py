@@ -1,0 +1,106 @@
+"""Stability of TPI (Eq. 38-39) under gravity: the `geostatic_column` at rest, run with
+`pressure.scheme = "tpi"`, over alpha and the gain G = dt gamma_l / (rho k).
+
+Eq. (38) has no storage term: p answers div v at once with gain gamma_l / sum_j A_ij
+(proportional to h^2 / k), and grad p feeds back into v. This acts like an explicit bulk
+viscosity gamma_l / (rho sum A), and the bound comes out independent of h: dt < C(alpha)
+rho k / gamma_l (measured, not derived; every dt here is below the solid limit Eq. (41)
+of the column, 6.9e-5 s). A run is stable if it reaches `--end` (default 0.3 s) without a
+numerical failure.
+
+    python bench/tpi_gravity.py            # table, bench/out/tpi_gravity.json and .png
+    python bench/tpi_gravity.py --plot-only
+"""
+
+import argparse
+import json
+import subprocess
+import sys
+from datetime import date
+from pathlib import Path
+
+OUT = Path(__file__).parent / "out"
+ROOT = Path(__file__).parent.parent
+ALPHAS = (0.0, 0.3, 0.5, 0.7)
+GAINS = (0.2, 0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.8, 0.9, 1.0, 1.1, 1.2)
+GAMMA, RHO = 9810.0, 0.65 * 2650.0 + 0.35 * 1000.0
+
+
+def run(alpha: float, k: float, dt: float, end: float) -> tuple[bool, int]:
+    r = subprocess.run(
+        [sys.executable, "-m", "psph", "run", "geostatic_column", "--quiet",
+         "--out", str(OUT / "tpi_gravity_run"), "--set", "pressure.scheme='tpi'",
+         "--set", f"pressure.alpha={alpha}", "--set", f"material.k={k}",
+         "--set", f"time.dt={dt!r}", "--set", f"time.end={end}",
+         "--set", "checkpoint.at_end=false", "--set", f"output.interval={end}"],
+        capture_output=True, text=True, cwd=ROOT)
+    if r.returncode not in (0, 3):
+        raise RuntimeError(r.stderr)
+    step = 0
+    if r.returncode == 3:
+        step = int(r.stderr.split("step ")[1].split(",")[0])
+    return r.returncode == 0, step
+
+
+def main(end: float, k: float) -> None:
+    rows = []
+    for alpha in ALPHAS:
+        for g in GAINS:
+            dt = g * RHO * k / GAMMA
+            ok, step = run(alpha, k, dt, end)
+            rows.append({"alpha": alpha, "gain": g, "dt": dt, "k": k, "stable": ok,
+                         "failed_at_step": step})
+            print(f"alpha {alpha:.1f}  G {g:.2f}  dt {dt:.2e}  "
+                  f"{'stable' if ok else f'failed at step {step}'}", flush=True)
+    report = {"date": str(date.today()), "end_s": end, "rows": rows}
+    OUT.mkdir(exist_ok=True)
+    (OUT / "tpi_gravity.json").write_text(json.dumps(report, indent=2) + "\n")
+    table(report)
+    plot(report)
+
+
+def table(report: dict) -> None:
+    print(f"\nTPI under gravity, geostatic_column to {report['end_s']} s, {report['date']}")
+    print("alpha | " + " ".join(f"{g:<5}" for g in GAINS) + "   (G)")
+    for a in ALPHAS:
+        cells = [r for r in report["rows"] if r["alpha"] == a]
+        print(f"{a:5.1f} | " + " ".join(f"{'ok' if r['stable'] else 'x':5s}" for r in cells))
+    print(f"wrote {OUT / 'tpi_gravity.json'}")
+
+
+def plot(report: dict) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8.5, 3.6))
+    for r in report["rows"]:
+        ax.plot(r["gain"], r["alpha"], "o" if r["stable"] else "x",
+                color="C2" if r["stable"] else "C3", ms=8)
+    ax.plot([], [], "o", color="C2", label="stable")
+    ax.plot([], [], "x", color="C3", label="blows up")
+    ax.axvline(0.47, ls=":", c="grey", label="paper's collapse (G = 0.47)")
+    a = [0.0, 0.75]
+    ax.plot([1.15 * (1 - x) for x in a], a, "k--", lw=1, label=r"fit G = 1.15 (1 - $\alpha$)")
+    ax.set_xlabel(r"G = $\Delta t\,\gamma_l / (\rho k)$")
+    ax.set_ylabel(r"TPI $\alpha$")
+    ax.set_title("TPI with gravity: geostatic column", fontsize=10)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.tight_layout()
+    fig.savefig(OUT / "tpi_gravity.png", dpi=110)
+    print(f"wrote {OUT / 'tpi_gravity.png'}")
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--end", type=float, default=0.3)
+    ap.add_argument("--k", type=float, default=2e-4)
+    ap.add_argument("--plot-only", action="store_true")
+    a = ap.parse_args()
+    if a.plot_only:
+        rep = json.loads((OUT / "tpi_gravity.json").read_text())
+        table(rep)
+        plot(rep)
+    else:
+        main(a.end, a.k)
