@@ -37,7 +37,50 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
         paths.append(_harmonic_picture(out, scene, snaps))
     elif ref == "strip_footing":
         paths.append(_strip_picture(out, scene, snaps))
+    elif ref == "collapse":
+        paths.append(_collapse_picture(out, scene, snaps))
     return paths
+
+
+def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
+    """Frames at up to 4 snapshot times: equivalent plastic strain, and for a coupled run
+    the pore pressure and the mean effective stress (Figs. 14-16, 19-21)."""
+    frames = [snaps[i] for i in np.unique(np.linspace(0, len(snaps) - 1, 4).astype(int))]
+    coupled = scene.pressure.scheme != "none"
+    cols = 3 if coupled else 1
+    x_all = np.concatenate([f["x"] for f in frames])
+    lo, hi = x_all.min(axis=0), x_all.max(axis=0)
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-9)
+    fig, axes = plt.subplots(len(frames), cols, squeeze=False,
+                             figsize=(5.5 * cols, 0.6 + len(frames) * 5.5 * aspect * 1.1))
+    for r, f in enumerate(frames):
+        fields = [("eps_p", np.log10(f["eps_p"] + 1e-4), "log10 eps_p", (-4, 1), "viridis")]
+        if coupled:
+            mean = -(f["stress"][:, 0] + f["stress"][:, 1] + f["stress"][:, 2]) / 3e3
+            lim = max(np.abs(f["p"]).max() / 1e3, 1e-6)
+            fields += [("p", f["p"] / 1e3, "p (kPa)", (-lim, lim), "coolwarm"),
+                       ("mean", mean, "p' (kPa)", (0, max(mean.max(), 1e-6)), "magma")]
+        for c, (_, val, label, (vmin, vmax), cmap) in enumerate(fields):
+            ax = axes[r, c]
+            sc = ax.scatter(f["x"][:, 0], f["x"][:, 1], c=val, s=1.5, cmap=cmap, vmin=vmin,
+                            vmax=vmax)
+            ax.set_xlim(lo[0], hi[0])
+            ax.set_ylim(lo[1], hi[1])
+            ax.set_aspect("equal")
+            ax.set_title(f"{label}, t = {f['time']:.3g} s", fontsize=9)
+            fig.colorbar(sc, ax=ax, shrink=0.8)
+    summary = out / "summary.json"
+    if summary.is_file():
+        m = json.loads(summary.read_text()).get("metrics", {}).get("collapse")
+        if m:
+            fig.suptitle(f"{scene.name}: run-out {m['runout_m']:.2f} m, final height "
+                         f"{m['final_height_m']:.2f} m, back scarp at {m['back_scarp_m']:.2f} m",
+                         fontsize=10)
+    path = out / f"{scene.name}.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def _history(out: Path) -> dict[str, np.ndarray]:

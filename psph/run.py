@@ -234,9 +234,20 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, stat
         cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
         x0 = initial_particles(scene)["x"] if probes else None
         verification = history_errors(scene, cols, {k: tuple(x0[i]) for k, i in probes.items()})
+    if rank0 and scene.verification.reference == "collapse" and status == "finished":
+        from psph.io.snapshots import read_snapshots
+        from psph.verify.collapse import collapse_metrics
+
+        last = read_snapshots(out / "particles.h5")[-1]
+        verification = {"collapse": collapse_metrics(last["x"], last["x"] - last["u"],
+                                                     scene.particles.dx),
+                        "time_s": last["time"]}
+        if history:
+            verification["p_max_Pa"] = max(r["p_max"] for r in history)
+            verification["p_min_Pa"] = min(r["p_min"] for r in history)
     verification = slabs.comm.bcast(verification, root=0)
     if verification is not None:
-        summary["errors"] = verification
+        summary["errors" if "collapse" not in verification else "metrics"] = verification
     if rank0:
         _write_history(out / "history.csv", history)
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
@@ -270,9 +281,10 @@ def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
             local[3 + 3 * k:6 + 3 * k] = (st.p[i], st.u[i, 0], st.u[i, 1])
     tot = sim.slabs.allreduce_sum(local)
     pmax = sim.slabs.allreduce_max(float(np.max(st.p[:n])) if n else -math.inf)
+    pmin = -sim.slabs.allreduce_max(float(-np.min(st.p[:n])) if n else -math.inf)
     row = {"time": sim.t, "step": sim.step,
            "settlement": tot[0] / tot[1] if tot[1] > 0 else 0.0,
-           "kinetic_energy": tot[2], "p_max": pmax,
+           "kinetic_energy": tot[2], "p_max": pmax, "p_min": pmin,
            "imbalance": sim.slabs.imbalance(st)}
     for k, name in enumerate(probes):
         row[f"p_{name}"] = tot[3 + 3 * k]

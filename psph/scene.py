@@ -139,7 +139,8 @@ class Output(_Model):
 
 
 class Verification(_Model):
-    reference: Literal["none", "terzaghi", "harmonic", "strip_footing"] = "none"
+    # collapse: run-out, final height and back scarp in summary.json (psph.verify.collapse)
+    reference: Literal["none", "terzaghi", "harmonic", "strip_footing", "collapse"] = "none"
     tv: list[Pos] = []  # time factors T_v at which to snapshot and compare
 
 

@@ -17,7 +17,8 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
     m = scene.material
     poro = np.full(n, m.porosity)
     vol = np.full(n, dx * dx)
-    rho = (1 - poro) * m.rho_s + poro * m.rho_l
+    # a dry scene (no pore-pressure stages) has empty pores
+    rho = (1 - poro) * m.rho_s + (poro * m.rho_l if scene.pressure.scheme != "none" else 0.0)
     data = {
         "key": np.arange(n, dtype=float),
         "x": x,
