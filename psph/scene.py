@@ -71,6 +71,8 @@ class Material(_Model):
     K_l: Pos = 1.0e9
     k: Pos
     g_ref: Pos = 9.81  # converts hydraulic conductivity k: gamma_l = rho_l g_ref
+    # Kozeny-Carman coefficient of Eq. (4), k = k exp((e - e0) / C_k); 0: constant k
+    C_k: Annotated[float, Field(ge=0.0)] = 0.0
 
 
 class Boundary(_Model):
@@ -108,6 +110,8 @@ class Pressure(_Model):
     beta: Annotated[float, Field(ge=0.0)] = 0.0  # Eq. (47) for p < 0 (paper: 0.04); 0: off
     explicit_until: Annotated[float, Field(ge=0.0)] = 0.0  # s: explicit Eq. (25) before this
     acceleration_term: bool = False  # div(k dv/dt)/g of Eq. (25)/(36); see README
+    # free-surface particles cannot hold positive pore pressure (ponding, Section 4.4)
+    ponding: bool = False
 
 
 class Time(_Model):

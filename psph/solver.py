@@ -251,7 +251,8 @@ class Simulation:
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      self.dp, st.eps_p)
+                      self.dp, st.eps_p, self.scene.pressure.ponding, self.scene.material.k,
+                      self.scene.material.C_k)
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)

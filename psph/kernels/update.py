@@ -6,6 +6,8 @@ porosity (Eq. 24), the pore pressure (explicit Eq. 25 or TPI Eq. 38-39), the vel
 (Eq. 45: Eq. 26 + global damping Eq. 43-44 + body force + surface loads) and the position.
 """
 
+import math
+
 import numba as nb
 
 from psph.kernels.interactions import NSUMS  # noqa: F401  (column layout documented there)
@@ -42,7 +44,7 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, p_prev_i, alpha, beta, dt):
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
             bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box, plastic, dp, eps_p):
+            acc_term, correct_strain, box, plastic, dp, eps_p, ponding, k_sat, c_k):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
@@ -53,6 +55,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     plastic: the elastic trial stress is returned to the Drucker-Prager surface with the
     parameters dp = (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) (Eq. 13-19) and eps_p
     accumulates the equivalent plastic strain.
+    ponding: free-surface particles get p <= 0 (Section 4.4); c_k > 0: the hydraulic
+    conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
     """
     bad = -1
     inv_g = rho_l / gamma_l
@@ -121,10 +125,20 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 p_new = tpi_pressure(b_i, s[16], s[17], p[i], p_prev[i], alpha, beta, dt)
                 p_prev[i] = p[i]
                 p[i] = p_new
+            if ponding and s[0] + s[3] < 1.5 and p[i] > 0.0:
+                # a free-surface particle (kernel support < 3/4 full: trace of the moment
+                # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure
+                p[i] = 0.0
+                if p_prev[i] > 0.0:
+                    p_prev[i] = 0.0
             n_new = poro[i] + dt * dn
             poro[i] = n_new
             vol[i] = vol0[i] * (1.0 - poro0[i]) / (1.0 - n_new)
             rho[i] = (1.0 - n_new) * rho_s + n_new * rho_l
+            if c_k > 0.0:
+                # permeability from the void ratio, Eq. (4)
+                e0 = poro0[i] / (1.0 - poro0[i])
+                perm[i] = k_sat * math.exp((n_new / (1.0 - n_new) - e0) / c_k)
 
         # momentum, Eq. (45)
         a0 = s[23] + b0 - damping * v[i, 0]
