@@ -38,10 +38,26 @@ class Block(_Model):
     max: Vec2
 
 
+class Polygon(_Model):
+    """A polygon of soil (m): the lattice of the domain (spacing dx, anchored at
+    domain.min) inside it is filled with particles."""
+
+    vertices: Annotated[list[Vec2], Field(min_length=3)]
+
+
+class MeshGeometry(_Model):
+    """Soil from any mesh file meshio reads: particles on the domain lattice inside its
+    triangles and quads (2D, x-y plane)."""
+
+    file: str
+
+
 class Particles(_Model):
     dx: Pos
     h_factor: Annotated[float, Field(ge=1.0, le=2.0)] = 1.2  # h = 1.2 dx (Section 3.1)
-    blocks: Annotated[list[Block], Field(min_length=1)]
+    blocks: list[Block] = []
+    polygons: list[Polygon] = []
+    meshes: list[MeshGeometry] = []
 
 
 class Plasticity(_Model):
@@ -198,6 +214,20 @@ class Scene(_Model):
         for d in range(2):
             if hi[d] <= lo[d]:
                 raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
+        pa = self.particles
+        if not (pa.blocks or pa.polygons or pa.meshes):
+            raise _Rule("particles", "no blocks, polygons or meshes",
+                        "give at least one [[particles.blocks]], [[particles.polygons]] or "
+                        "[[particles.meshes]]")
+        for ip, poly in enumerate(pa.polygons):
+            for iv, v in enumerate(poly.vertices):
+                for d in range(2):
+                    if not lo[d] - 1e-12 <= v[d] <= hi[d] + 1e-12:
+                        raise _Rule(f"particles.polygons[{ip}].vertices[{iv}]", v,
+                                    f"outside the domain [{lo}, {hi}]")
+        for im, mesh in enumerate(pa.meshes):
+            if not Path(mesh.file).is_file():
+                raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")
         for ib, b in enumerate(self.particles.blocks):
             for d in range(2):
                 if b.max[d] <= b.min[d]:

@@ -4,15 +4,37 @@ import math
 
 import numpy as np
 
-from psph.scenes.geometry import lattice_block, surface_layer
+from psph.scenes.geometry import (
+    domain_lattice,
+    inside_mesh,
+    inside_polygon,
+    lattice_block,
+    surface_layer,
+)
 
 _NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
+
+
+def soil_positions(scene) -> np.ndarray:
+    """Particle positions: each block's own lattice, then the domain lattice points inside
+    the polygons and meshes (each point once, in that order)."""
+    dx = scene.particles.dx
+    parts = [lattice_block(b.min, b.max, dx) for b in scene.particles.blocks]
+    if scene.particles.polygons or scene.particles.meshes:
+        grid = domain_lattice(scene.domain.min, scene.domain.max, dx)
+        taken = np.zeros(len(grid), bool)
+        for poly in scene.particles.polygons:
+            taken |= inside_polygon(grid, poly.vertices)
+        for mesh in scene.particles.meshes:
+            taken |= inside_mesh(grid, mesh.file)
+        parts.append(grid[taken])
+    return np.concatenate(parts)
 
 
 def initial_particles(scene) -> dict[str, np.ndarray]:
     """Positions, ids and every field's initial value for all particles of the scene."""
     dx = scene.particles.dx
-    x = np.concatenate([lattice_block(b.min, b.max, dx) for b in scene.particles.blocks])
+    x = soil_positions(scene)
     n = len(x)
     m = scene.material
     poro = np.full(n, m.porosity)

@@ -20,3 +20,67 @@ def surface_layer(x: np.ndarray, side: str, dx: float) -> np.ndarray:
     if side in ("right", "top"):
         return c > c.max() - 0.5 * dx
     return c < c.min() + 0.5 * dx
+
+
+def domain_lattice(lo, hi, dx: float) -> np.ndarray:
+    """Centres of the square lattice of spacing dx anchored at the domain's lower corner."""
+    return lattice_block(lo, hi, dx)
+
+
+def inside_polygon(points: np.ndarray, vertices) -> np.ndarray:
+    """Mask of the points inside the polygon (even-odd rule, matplotlib's Path); points
+    on an edge count as inside when the polygon is traced either way round."""
+    from matplotlib.path import Path as MplPath
+
+    path = MplPath(np.asarray(vertices, float))
+    eps = 1e-9 * max(np.ptp(np.asarray(vertices, float), axis=0).max(), 1.0)
+    return path.contains_points(points, radius=eps) | path.contains_points(points, radius=-eps)
+
+
+def inside_mesh(points: np.ndarray, file: str) -> np.ndarray:
+    """Mask of the points inside any triangle or quad of a mesh file (read by meshio)."""
+    import contextlib
+    import io
+
+    import meshio
+
+    from psph.errors import SceneError
+
+    try:  # meshio prints its own complaints and may exit: keep the one-line rule
+        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+            mesh = meshio.read(file)
+    except (Exception, SystemExit) as e:
+        reason = (str(e).strip().splitlines() or [type(e).__name__])[0][:120]
+        raise SceneError(f"particles.meshes: {file}: meshio cannot read it ({reason})") \
+            from None
+    xy = mesh.points[:, :2]
+    tris = []
+    for block in mesh.cells:
+        if block.type.startswith("triangle"):
+            tris.append(block.data[:, :3])
+        elif block.type.startswith("quad"):
+            q = block.data[:, :4]
+            tris += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
+    if not tris:
+        raise SceneError(f"particles.meshes: {file}: no triangle or quad cells")
+    tri = np.concatenate(tris)
+    inside = np.zeros(len(points), bool)
+    a, b, c = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
+    for k in range(len(tri)):  # per cell, only the lattice points in its bounding box
+        lo = np.minimum(np.minimum(a[k], b[k]), c[k])
+        hi = np.maximum(np.maximum(a[k], b[k]), c[k])
+        sel = np.flatnonzero(np.all((points >= lo - 1e-12) & (points <= hi + 1e-12), axis=1))
+        if not len(sel):
+            continue
+        p = points[sel]
+        v0, v1, v2 = c[k] - a[k], b[k] - a[k], p - a[k]
+        d00, d01, d11 = v0 @ v0, v0 @ v1, v1 @ v1
+        d20, d21 = v2 @ v0, v2 @ v1
+        den = d00 * d11 - d01 * d01
+        if den == 0.0:
+            continue
+        u = (d11 * d20 - d01 * d21) / den
+        w = (d00 * d21 - d01 * d20) / den
+        tol = 1e-12
+        inside[sel] |= (u >= -tol) & (w >= -tol) & (u + w <= 1 + tol)
+    return inside
