@@ -109,7 +109,9 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     if meta is None:
         sim = Simulation(scene, slabs)
     else:
-        sim = Simulation(scene, slabs, state, t=meta["t"], step=meta["step"])
+        alive = state.pop("alive")
+        sim = Simulation(scene, slabs, state, t=meta["t"], step=meta["step"], alive=alive,
+                         removals_done=meta["removals_done"])
     del state
     writer = SnapshotWriter(out / "particles.h5", comm, scene.dim, toml_text,
                             resume_step=None if meta is None else sim.step)
@@ -136,7 +138,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     loop0 = time.perf_counter()
 
     def snapshot():
-        slabs.check_census(sim.store, sim.n_global, sim.step, sim.t)
+        slabs.check_census(sim.store, sim.alive, sim.step, sim.t)
         writer.write(sim.step, sim.t, sim.store)
         if monitor is not None:
             monitor.snapshot(sim)
@@ -155,10 +157,12 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         nonlocal last_ck_wall
         sim.check_failure()  # never save a broken state
         info = {"t": sim.t, "step": sim.step, "n_global": sim.n_global,
+                "n_ids": sim.n_ids, "removals_done": sim.removals_done,
                 "next_hist": next_hist, "scene": toml_text,
                 "monitor": None if monitor is None else monitor.state(),
                 "ranks": slabs.size}
-        write_checkpoint(ck_path, comm, sim.store, info, history=history if rank0 else None)
+        write_checkpoint(ck_path, comm, sim.store, info, history=history if rank0 else None,
+                         alive=sim.alive)
         last_ck_wall = time.perf_counter()
 
     def control() -> bool:

@@ -164,6 +164,16 @@ class Verification(_Model):
     tv: list[Pos] = []  # time factors T_v at which to snapshot and compare
 
 
+class Removal(_Model):
+    """Particles inside a region at time `at` are removed from the run: the gate of a
+    collapse, an excavated slope toe. The region is a box (min, max) or a polygon."""
+
+    at: Annotated[float, Field(ge=0.0)] = 0.0  # s
+    min: Vec2 | None = None
+    max: Vec2 | None = None
+    polygon: Annotated[list[Vec2], Field(min_length=3)] | None = None
+
+
 class Initial(_Model):
     """In-situ state at t = 0 (Section 4.4-4.5): hydrostatic pore pressure below a water
     table, and the K0 procedure for the effective stress under gravity."""
@@ -205,6 +215,7 @@ class Scene(_Model):
     output: Output = Output()
     verification: Verification = Verification()
     initial: Initial = Initial()
+    remove: list[Removal] = []
     decomposition: Decomposition = Decomposition()
     checkpoint: Checkpoint = Checkpoint()
 
@@ -225,6 +236,10 @@ class Scene(_Model):
                     if not lo[d] - 1e-12 <= v[d] <= hi[d] + 1e-12:
                         raise _Rule(f"particles.polygons[{ip}].vertices[{iv}]", v,
                                     f"outside the domain [{lo}, {hi}]")
+        for ir, rm in enumerate(self.remove):
+            box = rm.min is not None and rm.max is not None
+            if box == (rm.polygon is not None) or (rm.min is None) != (rm.max is None):
+                raise _Rule(f"remove[{ir}]", "region", "give either min and max, or polygon")
         for im, mesh in enumerate(pa.meshes):
             if not Path(mesh.file).is_file():
                 raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")

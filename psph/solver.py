@@ -25,6 +25,7 @@ from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
 from psph.scene import Scene, fluid_dt_limit, solid_dt_limit
+from psph.scenes.geometry import inside_polygon
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
               "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
@@ -79,9 +80,11 @@ class Simulation:
     """State, pipeline and clock of one run on this rank."""
 
     def __init__(self, scene: Scene, slabs, state: dict | None = None, t: float = 0.0,
-                 step: int = 0):
+                 step: int = 0, alive: np.ndarray | None = None, removals_done: int = 0):
         """`state`: global arrays of every particle field (a checkpoint) with the clock
-        (t, step) they belong to; default: the scene's initial particles at t = 0."""
+        (t, step) they belong to; default: the scene's initial particles at t = 0.
+        `alive`: which of the initial ids are still in the run (a checkpoint's), and
+        `removals_done`: how many `remove` regions were applied already."""
         self.scene = scene
         self.slabs = slabs
         self.soil = soil_from_scene(scene)
@@ -93,6 +96,10 @@ class Simulation:
 
         data = initial_particles(scene) if state is None else state
         self.n_global = len(data["key"])
+        self.alive = np.ones(self.n_global, np.bool_) if alive is None else alive.astype(bool)
+        self.n_ids = len(self.alive)  # ids run 0..n_ids-1; removed ones are not alive
+        self.removals = sorted(scene.remove, key=lambda r: r.at)
+        self.removals_done = removals_done
         mine = slabs.owned_mask(data["x"])
         self.store = ParticleStore(int(2 * mine.sum()) + 256)
         self.store.load({k: v[mine] for k, v in data.items()})
@@ -182,7 +189,7 @@ class Simulation:
     def _ghosts(self) -> None:
         st = self.store
         while True:
-            ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_global),
+            ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids),
                              self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
                              st.x, st.v, st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho,
                              st.perm, st.acc, st.key, self.head_b)
@@ -262,7 +269,35 @@ class Simulation:
 
     # ------------------------------------------------------------------ stepping
 
+    def apply_removals(self) -> int:
+        """Remove the particles inside every `remove` region whose time has come
+        (collective: t is the same on every rank). Returns how many were removed."""
+        removed = 0
+        while (self.removals_done < len(self.removals)
+               and self.t >= self.removals[self.removals_done].at * (1 - 1e-12)):
+            rm = self.removals[self.removals_done]
+            st = self.store
+            n = st.n_owned
+            x = st.x[:n]
+            if rm.polygon is not None:
+                inside = inside_polygon(x, rm.polygon)
+            else:
+                inside = np.all((x >= np.array(rm.min)) & (x <= np.array(rm.max)), axis=1)
+            ids = self.slabs.allgather_ids(st.key[:n][inside].astype(np.int64))
+            keep = np.flatnonzero(~inside)
+            for a in st.all_rows:
+                a[:len(keep)] = a[keep]
+            st.n_owned = len(keep)
+            st.n_halo = st.n_ghost = 0
+            self.alive[ids] = False
+            self.n_global = int(self.alive.sum())
+            self.removals_done += 1
+            removed += len(ids)
+        return removed
+
     def advance_one(self) -> None:
+        if self.removals_done < len(self.removals):
+            self.apply_removals()
         self.dt, self.scheme = self.stepping.at(self.t)
         timer = time.perf_counter
         for stage in self.stages:

@@ -121,3 +121,20 @@ def test_shepard_and_eq47_column_one_vs_two_ranks_bitwise(tmp_path_factory):
     scene = load_scene("terzaghi", COLUMN + ["stabilisation.shepard_every=7",
                                              "pressure.beta=0.04"])
     _one_vs_two(comm, scene, out)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_removal_of_regions_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """Regions removed at given times (tests/test_removal.py) on both ranks' particles."""
+    from mpi4py import MPI
+
+    from tests.helpers import falling_far
+    from tests.test_removal import REMOVE
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    scene_file = falling_far(out) if comm.Get_rank() == 0 else None
+    comm.Barrier()
+    scene = load_scene(str(out / "falling_far.toml") if scene_file is None else str(scene_file),
+                       REMOVE + ["time.end=0.15"])
+    _one_vs_two(comm, scene, out)

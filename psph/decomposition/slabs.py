@@ -196,23 +196,31 @@ class Slabs:
 
     # --------------------------------------------------------------- census
 
-    def check_census(self, store: ParticleStore, n_global: int, step: int, t: float) -> None:
-        """Every global id 0..n_global-1 is owned by exactly one rank (collective); raises
-        NumericalError naming the first id lost or duplicated."""
+    def allgather_ids(self, ids: np.ndarray) -> np.ndarray:
+        """The concatenation of every rank's `ids` (collective)."""
+        return np.concatenate(self.comm.allgather(np.asarray(ids, np.int64)))
+
+    def check_census(self, store: ParticleStore, alive: np.ndarray, step: int, t: float
+                     ) -> None:
+        """Every id with alive[id] is owned by exactly one rank and no other id by any
+        (collective); raises NumericalError naming the first id lost or duplicated."""
+        n_ids = len(alive)
         keys = store.key[:store.n_owned].astype(np.int64)
-        local = np.bincount(keys[(keys >= 0) & (keys < n_global)],
-                            minlength=n_global).astype(np.int32)
-        stray = int(np.count_nonzero((keys < 0) | (keys >= n_global)))
+        local = np.bincount(keys[(keys >= 0) & (keys < n_ids)],
+                            minlength=n_ids).astype(np.int32)
+        stray = int(np.count_nonzero((keys < 0) | (keys >= n_ids)))
         total = np.empty_like(local)
         self.comm.Allreduce(local, total, op=MPI.SUM)
         stray = self.comm.allreduce(stray, op=MPI.SUM)
-        if stray or not np.all(total == 1):
-            bad = np.flatnonzero(total != 1)
+        expected = alive.astype(np.int32)
+        if stray or not np.array_equal(total, expected):
+            bad = np.flatnonzero(total != expected)
             pid = int(bad[0]) if len(bad) else -1
             count = int(total[pid]) if len(bad) else 0
             raise NumericalError(
                 f"step {step}, t = {t:.6g} s, particle id {pid}: field id (owned by {count} "
-                f"ranks instead of 1; {len(bad)} ids wrong, {stray} unknown ids) - "
+                f"ranks instead of {int(expected[pid]) if len(bad) else 1}; {len(bad)} ids "
+                f"wrong, {stray} unknown ids) - "
                 "particles lost or duplicated in migration")
 
     # --------------------------------------------------------------- reductions

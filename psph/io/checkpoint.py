@@ -22,10 +22,11 @@ from psph.particles import FIELDS
 FORMAT = "psph-checkpoint-1"
 
 
-def write_checkpoint(path: Path, comm, store, meta: dict, history: list[dict] | None = None
-                     ) -> None:
+def write_checkpoint(path: Path, comm, store, meta: dict, history: list[dict] | None = None,
+                     alive: np.ndarray | None = None) -> None:
     """Collective: all particle fields of the owned rows, `meta` (JSON-able, the same on
-    every rank) and rank 0's diagnostics rows `history` (given on rank 0)."""
+    every rank), rank 0's diagnostics rows `history` (given on rank 0) and the `alive`
+    mask of the ids still in the run (the same on every rank)."""
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
     n_local = store.n_owned
@@ -47,6 +48,10 @@ def write_checkpoint(path: Path, comm, store, meta: dict, history: list[dict] | 
         d = f.create_dataset("history_json", shape=(size,), dtype=np.uint8)
         if text is not None and size:
             d[:] = text  # independent write from rank 0
+        if alive is not None:
+            d = f.create_dataset("alive", shape=alive.shape, dtype=np.uint8)
+            if comm.Get_rank() == 0 and len(alive):
+                d[:] = alive.astype(np.uint8)
         f.attrs["complete"] = 1  # the last write: a file without it was cut short
     comm.Barrier()
     if comm.Get_rank() == 0:
@@ -71,6 +76,8 @@ def read_checkpoint(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
                                  "interrupted); use the previous one")
             meta = json.loads(f.attrs["meta"])
             arrays = {fld.name: f["particles"][fld.name][()] for fld in FIELDS}
+            n_ids = meta.get("n_ids", meta.get("n_global"))
+            alive = f["alive"][()].astype(bool) if "alive" in f else np.ones(n_ids, bool)
     except SceneError:
         raise
     except (OSError, KeyError, ValueError) as e:
@@ -80,6 +87,11 @@ def read_checkpoint(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     if bad:
         raise SceneError(f"{where}: corrupt checkpoint (field {bad[0]} has "
                          f"{len(arrays[bad[0]])} rows, expected {n})")
+    if int(alive.sum()) != n:
+        raise SceneError(f"{where}: corrupt checkpoint ({int(alive.sum())} ids alive, "
+                         f"{n} particles)")
+    arrays["alive"] = alive
+    meta.setdefault("removals_done", 0)
     return meta, arrays
 
 
