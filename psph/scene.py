@@ -178,7 +178,9 @@ class Initial(_Model):
     """In-situ state at t = 0 (Section 4.4-4.5): hydrostatic pore pressure below a water
     table, and the K0 procedure for the effective stress under gravity."""
 
-    water_table: float | None = None  # m (elevation y); p = rho_l |g| (y_wt - y) below it
+    # m (elevation y): p = rho_l |g| (y_wt - y) below it; "surface": the water table
+    # follows the ground surface (p = rho_l |g| depth below the top of each column)
+    water_table: float | Literal["surface"] | None = None
     k0: Annotated[float, Field(gt=0.0)] | None = None  # sigma'_h = K0 sigma'_v; none: zero
 
 

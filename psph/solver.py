@@ -325,10 +325,12 @@ class Simulation:
 
 
 def _bad_field(st: ParticleStore, i: int) -> str:
-    """Name and value of the first non-finite field of particle row i, or the position of
-    a particle that left the domain."""
+    """Name and value of the first non-finite (or beyond 1e300) field of particle row i,
+    or the position of a particle that left the domain."""
     for name in ("p", "v", "stress", "x"):
-        value = st.arrays[name][i]
+        value = np.asarray(st.arrays[name][i])
         if not np.all(np.isfinite(value)):
-            return f"{name} = {np.asarray(value).tolist()} (not finite)"
+            return f"{name} = {value.tolist()} (not finite)"
+        if not np.all(np.abs(value) < 1e300):
+            return f"{name} = {value.tolist()} (diverged)"
     return f"x = {st.x[i].tolist()} (left the domain)"

@@ -75,7 +75,8 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
 
 
 def geostatic(scene, data: dict[str, np.ndarray]) -> None:
-    """Hydrostatic pore pressure below `initial.water_table` and the K0 effective stress
+    """Hydrostatic pore pressure below `initial.water_table` (an elevation, or "surface":
+    zero at the centres of each column's top particle) and the K0 effective stress
     (sigma'_v from the weight of the soil above, sigma'_h = sigma'_zz = K0 sigma'_v), in
     place. The ground surface above a particle is the top of its particle column.
 
@@ -86,17 +87,19 @@ def geostatic(scene, data: dict[str, np.ndarray]) -> None:
     n = len(data["key"])
     g = -scene.gravity[1]
     x = data["x"]
+    dx = scene.particles.dx
+    column = np.round(x[:, 0] / dx).astype(np.int64)
+    top = np.full(column.max() - column.min() + 1, -np.inf)
+    np.maximum.at(top, column - column.min(), x[:, 1])
+    depth = top[column - column.min()] + 0.5 * dx - x[:, 1]
     if init.water_table is not None:
-        p = scene.material.rho_l * g * np.maximum(init.water_table - x[:, 1], 0.0)
+        head = depth - 0.5 * dx if init.water_table == "surface" \
+            else init.water_table - x[:, 1]
+        p = scene.material.rho_l * g * np.maximum(head, 0.0)
         p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0), 0.0, p)
         data["p"] = p
         data["p_prev"] = p.copy()
     if init.k0 is not None:
-        dx = scene.particles.dx
-        column = np.round(x[:, 0] / dx).astype(np.int64)
-        top = np.full(column.max() - column.min() + 1, -np.inf)
-        np.maximum.at(top, column - column.min(), x[:, 1])
-        depth = top[column - column.min()] + 0.5 * dx - x[:, 1]
         sigma_v = -data["rho"] * g * depth + data.get("p", np.zeros(n))
         stress = np.zeros((n, 4))
         stress[:, 0] = init.k0 * sigma_v
