@@ -24,7 +24,7 @@ from psph.particles import ParticleStore
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
-from psph.scene import Scene, fluid_dt_limit, solid_dt_limit
+from psph.scene import Scene, fluid_dt_limit, solid_dt_limit, undrained_dt_limit
 from psph.scenes.geometry import inside_polygon
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
@@ -68,8 +68,10 @@ def time_stepping(scene: Scene) -> TimeStepping:
         dt_exp = dt_s
     else:
         dt_l = fluid_dt_limit(scene)
+        dt_u = undrained_dt_limit(scene)
         limits["dt_fluid_eq42"] = dt_l
-        dt_exp = min(dt_s, dt_l)
+        limits["dt_undrained_eq41"] = dt_u
+        dt_exp = min(dt_s, dt_l, dt_u)
         dt_main = dt_exp if scheme == SCHEME_EXPLICIT else min(dt_s, scene.pressure.R * dt_l)
     if scene.time.dt is not None:
         dt_main = scene.time.dt
@@ -260,12 +262,12 @@ class Simulation:
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
                       self.dp, st.eps_p, self.scene.pressure.ponding, self.scene.material.k,
                       self.scene.material.C_k)
+        if bad >= 0 and self.failure is None:  # named before any wall moves it back
+            what = _bad_field(st, bad)
+            self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
-        if bad >= 0 and self.failure is None:
-            what = _bad_field(st, bad)
-            self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
 
     # ------------------------------------------------------------------ stepping
 

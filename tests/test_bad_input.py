@@ -52,6 +52,7 @@ CASES = [
     (["--set", "decomposition.imbalance_threshold=0.9"],
      ["decomposition.imbalance_threshold", "0.9", "greater than 1"]),
     (["--set", "decomposition.rebalance_every=1.5"], ["decomposition.rebalance_every"]),
+    (["--set", "pressure.scheme='explicit'"], ["time.dt", "undrained wave limit"]),
     (["--set", "material.C_k=-2.0"], ["material.C_k", "-2.0", "greater than or equal to 0"]),
     (["--set", "pressure.ponding=1"], ["pressure.ponding", "1"]),
 ]

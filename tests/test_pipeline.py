@@ -20,7 +20,7 @@ def _stages(overrides):
 
 
 @pytest.mark.parametrize("overrides, present, absent", [
-    (["pressure.scheme='explicit'"],
+    (["pressure.scheme='explicit'", "time.dt=2.8e-7"],
      ["update[explicit,elastic]", "interactions[momentum,pressure]"],
      ["tpi", "shepard", "exchange", "drucker_prager", "rebalance"]),
     (["pressure.explicit_until=0.0"], ["update[tpi,elastic]"], ["explicit", "shepard"]),
