@@ -339,6 +339,7 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
             "rebalances": slabs.rebalances,
             "imbalance_final": slabs.imbalance(sim.store),
             "imbalance_max_seen": slabs.max_imbalance,
+            "imbalance_max_after_recut": slabs.max_after_recut,
             "cuts": [float(c) for c in slabs.cuts[1:-1]],
         },
         "stage_seconds": stages,

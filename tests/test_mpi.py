@@ -99,7 +99,10 @@ def test_falling_block_migrates_bitwise(tmp_path_factory):
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    scene = load_scene(str(falling_block(out)))
+    if comm.Get_rank() == 0:  # one writer: another rank could read a half-written file
+        falling_block(out)
+    comm.Barrier()
+    scene = load_scene(str(out / "falling.toml"))
     _one_vs_two(comm, scene, out)
     crossed = None
     if comm.Get_rank() == 0:
@@ -133,8 +136,8 @@ def test_removal_of_regions_one_vs_two_ranks_bitwise(tmp_path_factory):
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    scene_file = falling_far(out) if comm.Get_rank() == 0 else None
+    if comm.Get_rank() == 0:
+        falling_far(out)
     comm.Barrier()
-    scene = load_scene(str(out / "falling_far.toml") if scene_file is None else str(scene_file),
-                       REMOVE + ["time.end=0.15"])
+    scene = load_scene(str(out / "falling_far.toml"), REMOVE + ["time.end=0.15"])
     _one_vs_two(comm, scene, out)

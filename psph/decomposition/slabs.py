@@ -45,7 +45,8 @@ class Slabs:
         self.set_cuts(cuts)
         self.rebalances = 0
         self.last_imbalance = 1.0
-        self.max_imbalance = 1.0
+        self.max_imbalance = 1.0  # the largest the rebalance check has seen
+        self.max_after_recut = 1.0  # the largest right after a recut
         self.down = self.rank - 1 if self.rank > 0 else MPI.PROC_NULL
         self.up = self.rank + 1 if self.rank < self.size - 1 else MPI.PROC_NULL
         self._idx_cap = 0
@@ -165,7 +166,7 @@ class Slabs:
         self.set_cuts(balanced_cuts(self.comm, store.x[:n, self.axis], min_width))
         self.redistribute(store)
         self.rebalances += 1
-        self.last_imbalance = self.imbalance(store)
+        self.max_after_recut = max(self.max_after_recut, self.imbalance(store))
         return True
 
     def redistribute(self, store: ParticleStore) -> None:
