@@ -23,7 +23,7 @@ DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability \
-	bench-scaling bench-ranks bench-tpi-gravity lint clean-env
+	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta lint clean-env
 
 env: $(STAMP)
 
@@ -78,6 +78,10 @@ bench-scaling: env
 # TPI stability of a column at rest under gravity, over alpha and dt gamma_l / (rho k)
 bench-tpi-gravity: env
 	$(VPY) bench/tpi_gravity.py
+
+# the dilative saturated collapse with and without Eq. (47), side by side (Fig. 16)
+bench-collapse-beta: env
+	$(VPY) bench/collapse_beta.py
 
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env
