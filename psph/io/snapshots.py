@@ -53,8 +53,14 @@ def write_rows(dset, start: int, a: np.ndarray) -> None:
         mspace = h5py.h5s.create_simple((1,) + a.shape[1:])
         mspace.select_none()
         buf = np.zeros((1,) + a.shape[1:], a.dtype)
-    with dset.collective:
-        dset.id.write(mspace, fspace, buf, dxpl=dset._dxpl)
+    dset.id.write(mspace, fspace, buf, dxpl=_collective_transfer())
+
+
+def _collective_transfer():
+    """A dataset-transfer property list for collective MPI-IO (h5py's low-level API)."""
+    dxpl = h5py.h5p.create(h5py.h5p.DATASET_XFER)
+    dxpl.set_dxpl_mpio(h5py.h5fd.MPIO_COLLECTIVE)
+    return dxpl
 
 
 class SnapshotWriter:
