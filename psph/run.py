@@ -240,12 +240,14 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, stat
         verification = history_errors(scene, cols, {k: tuple(x0[i]) for k, i in probes.items()})
     if rank0 and scene.verification.reference == "collapse" and status == "finished":
         from psph.io.snapshots import read_snapshots
-        from psph.verify.collapse import collapse_metrics
+        from psph.verify.collapse import collapse_metrics, slide_history
 
-        last = read_snapshots(out / "particles.h5")[-1]
+        snaps = read_snapshots(out / "particles.h5")
+        last = snaps[-1]
         verification = {"collapse": collapse_metrics(last["x"], last["x"] - last["u"],
                                                      scene.particles.dx),
                         "time_s": last["time"]}
+        verification["collapse"].update(slide_history(snaps, scene.particles.dx))
         if history:
             verification["p_max_Pa"] = max(r["p_max"] for r in history)
             verification["p_min_Pa"] = min(r["p_min"] for r in history)

@@ -136,6 +136,9 @@ class Time(_Model):
     cfl_solid: Pos = 0.1  # C_CFL^s of Eq. (41)
     cfl_fluid: Pos = 0.1  # C_CFL^l of Eq. (42)
     allow_dt_above_solid_limit: bool = False
+    # "euler": one pair sweep, rates from v^n; "symplectic": kick v first, then a second
+    # (velocity-only) sweep gives the stress/pressure rates from v^(n+1), Eq. (27)
+    integrator: Literal["euler", "symplectic"] = "euler"
 
 
 class Stabilisation(_Model):

@@ -15,11 +15,11 @@ import numpy as np
 from psph.errors import NumericalError
 from psph.kernels.artificial_stress import artificial_stress
 from psph.kernels.ghosts import make_ghosts, wall_contact
-from psph.kernels.interactions import NSUMS, pair_sums
+from psph.kernels.interactions import NSUMS, pair_sums, velocity_gradient_sums
 from psph.kernels.neighbours import bin_particles, grid_bounds
 from psph.kernels.shepard import shepard_pressure
 from psph.kernels.spline import w_cubic
-from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance
+from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance, kick
 from psph.particles import ParticleStore
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
@@ -144,6 +144,13 @@ class Simulation:
         self.plastic = scene.material.model == "drucker_prager"
         self.dp = plasticity_parameters(scene)
         self.acc_term = self.coupled and scene.pressure.acceleration_term
+        self.symplectic = scene.time.integrator == "symplectic"
+        # pairs of the last sweep, reused by the symplectic velocity sweep
+        n_pairs0 = 16 * self.store.cap if self.symplectic else 0
+        self.pairs = np.zeros((n_pairs0, 2), np.int64)
+        self.pair_g = np.zeros((n_pairs0, 2))
+        self.n_pairs = 0
+        self.ponding = int(scene.pressure.ponding)
         self.dt, self.scheme = self.stepping.at(0.0)
         self.bad_particle = -1
         self.failure = None
@@ -170,6 +177,8 @@ class Simulation:
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
         stages.append(Stage(name, self._interactions))
+        if self.symplectic:
+            stages.append(Stage("kick+velocity_sweep", self._kick))
         pname = {SCHEME_NONE: "dry", SCHEME_EXPLICIT: "explicit",
                  SCHEME_TPI: "tpi"}[self.stepping.scheme_main]
         if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
@@ -243,11 +252,32 @@ class Simulation:
                 self.astress = np.zeros((st.cap, 3))
             artificial_stress(st.n_total, st.stress, st.p, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
-        pair_sums(st.n_total, st.n_owned, st.x, st.v, st.stress, st.p, st.p_prev, st.poro,
-                  st.vol, st.rho, st.perm, st.acc, self.cell_start, self.order, self.ncell,
-                  self.h, alpha, sb.av_alpha, sb.av_beta, self.soil.sound_speed,
-                  rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
-                  self.sums, self.astress, as_n, self.w_dx)
+        while True:
+            n = pair_sums(st.n_total, st.n_owned, st.x, st.v, st.stress, st.p, st.p_prev,
+                          st.poro, st.vol, st.rho, st.perm, st.acc, self.cell_start,
+                          self.order, self.ncell, self.h, alpha, sb.av_alpha, sb.av_beta,
+                          self.soil.sound_speed, rl * self.body[0], rl * self.body[1],
+                          self.coupled, self.acc_term, self.sums, self.astress, as_n,
+                          self.w_dx, self.symplectic, self.pairs, self.pair_g)
+            if n >= 0:
+                self.n_pairs = n
+                return
+            grow = 2 * self.pairs.shape[0]
+            self.pairs = np.zeros((grow, 2), np.int64)
+            self.pair_g = np.zeros((grow, 2))
+
+    def _kick(self) -> None:
+        """Symplectic step: v^(n+1) from the accelerations of step n, copied to the halo
+        and the wall ghosts, then the velocity sums again from v^(n+1)."""
+        st = self.store
+        load_values(self.scene.loads, self.t, self.load_value)
+        kick(st.n_owned, self.sums, st.v, st.acc, st.rho, st.vol, st.load_index, st.traction,
+             self.load_value, self.body[0], self.body[1], self.damping, self.dt)
+        self.slabs.refresh_halo(st.v)
+        if len(self.wall_axis):
+            self._ghosts()
+        velocity_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.v,
+                               st.poro, st.vol, self.coupled, self.sums)
 
     def _update(self) -> None:
         st = self.store
@@ -260,8 +290,8 @@ class Simulation:
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      self.dp, st.eps_p, self.scene.pressure.ponding, self.scene.material.k,
-                      self.scene.material.C_k)
+                      self.dp, st.eps_p, self.ponding, self.scene.material.k,
+                      self.scene.material.C_k, self.symplectic)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

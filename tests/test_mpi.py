@@ -141,3 +141,21 @@ def test_removal_of_regions_one_vs_two_ranks_bitwise(tmp_path_factory):
     comm.Barrier()
     scene = load_scene(str(out / "falling_far.toml"), REMOVE + ["time.end=0.15"])
     _one_vs_two(comm, scene, out)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_symplectic_step_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """The symplectic step refreshes halo velocities after the kick (Slabs.refresh_halo),
+    also for particles that migrated in that step's exchange."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        falling_block(out)
+    comm.Barrier()
+    scene = load_scene(str(out / "falling.toml"), ['time.integrator="symplectic"'])
+    _one_vs_two(comm, scene, out)
+    column = load_scene("terzaghi", COLUMN + ['time.integrator="symplectic"',
+                                             "stabilisation.shepard_every=7"])
+    _one_vs_two(comm, column, out / "column")

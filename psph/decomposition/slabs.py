@@ -52,6 +52,8 @@ class Slabs:
         self._idx_cap = 0
         self._send = {}
         self._recv = {}
+        self._row_map = np.zeros(0, np.int64)
+        self._refresh_plan = {}
 
     # --------------------------------------------------------------- setup
 
@@ -111,6 +113,15 @@ class Slabs:
         if n_own_migr:
             _compact(store, ix["keep"], nk)
         store.n_owned = nk
+        # halo rows sent, as row indices after the compaction (for refresh_halo)
+        if n_own_migr:
+            new_row = self._new_row(n)
+            new_row[ix["keep"][:nk]] = np.arange(nk)
+            self._halo_sent = (new_row[ix["hd"][:nhd]], new_row[ix["hu"][:nhu]])
+        else:
+            self._halo_sent = (ix["hd"][:nhd].copy(), ix["hu"][:nhu].copy())
+        migrants_in = {}
+        halo_in = {}
 
         reqs = [self.comm.Isend(bufs["up"], dest=self.up, tag=11),
                 self.comm.Isend(bufs["down"], dest=self.down, tag=12)]
@@ -131,6 +142,8 @@ class Slabs:
             # migrants become owned right away; halo rows are appended after all owned
             store.ensure(store.n_owned + nm + 64)
             unpack_rows(rbuf[1:1 + nm], nm, store.all_rows, store.n_owned)
+            migrants_in[source] = (store.n_owned, nm)
+            halo_in[source] = nh
             store.n_owned += nm
             received.append(rbuf[1 + nm:1 + nm + nh])
         MPI.Request.Waitall(reqs)
@@ -144,6 +157,50 @@ class Slabs:
             unpack_rows(own, n_own_migr, store.all_rows, start)
             start += n_own_migr
         store.n_halo = start - store.n_owned
+        # where each neighbour's fresh values go in refresh_halo: its halo rows, then the
+        # copies of the particles this rank just handed it
+        first = store.n_owned
+        nh_down = halo_in.get(self.down, 0)
+        nh_up = halo_in.get(self.up, 0)
+        own_at = first + nh_down + nh_up
+        self._refresh_plan = {
+            self.down: (self._halo_sent[0], migrants_in.get(self.down, (0, 0)),
+                        (first, nh_down), (own_at, nmd)),
+            self.up: (self._halo_sent[1], migrants_in.get(self.up, (0, 0)),
+                      (first + nh_down, nh_up), (own_at + nmd, nmu)),
+        }
+
+    def _new_row(self, n: int) -> np.ndarray:
+        if self._row_map.shape[0] < n:
+            self._row_map = np.zeros(max(n, 2 * self._row_map.shape[0]), np.int64)
+        return self._row_map
+
+    def refresh_halo(self, field: np.ndarray) -> None:
+        """Overwrite the halo rows of `field` (cap, k) with the owners' current values,
+        for the same halo as the last `exchange` (no particle has moved since). Each
+        neighbour sends its halo rows for this rank, then its current rows of the
+        particles this rank handed it in that exchange."""
+        if self.size == 1:
+            return
+        width = field.shape[1]
+        reqs = []
+        sends = []
+        for nbr, tag in ((self.down, 21), (self.up, 22)):
+            if nbr == MPI.PROC_NULL:
+                continue
+            halo_rows, (m0, nm), _, _ = self._refresh_plan[nbr]
+            buf = np.concatenate((field[halo_rows], field[m0:m0 + nm]))
+            sends.append(buf)
+            reqs.append(self.comm.Isend(buf, dest=nbr, tag=tag))
+        for nbr, tag in ((self.down, 22), (self.up, 21)):
+            if nbr == MPI.PROC_NULL:
+                continue
+            _, _, (h0, nh), (o0, no) = self._refresh_plan[nbr]
+            rbuf = np.empty((nh + no, width))
+            self.comm.Recv(rbuf, source=nbr, tag=tag)
+            field[h0:h0 + nh] = rbuf[:nh]
+            field[o0:o0 + no] = rbuf[nh:]
+        MPI.Request.Waitall(reqs)
 
     # --------------------------------------------------------------- load balance
 

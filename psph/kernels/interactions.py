@@ -34,14 +34,20 @@ NSUMS = 25
 @nb.njit(cache=True, error_model="numpy")
 def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
               cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
-              rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx):
+              rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx,
+              record, pairs, pair_g):
     """Accumulate the sums listed in the module docstring for particles 0..n_owned-1.
 
     coupled: pressure-related sums (Gp, Gn, Q, sA, sAp, sApsi) are computed;
     acc_term: the div(k dv/dt) sums (Ga) are computed. rho_l_b = rho_l * body force (N/m^3).
     astress: (cap, 3) artificial stress R (xx, yy, xy) of every row, added to the pair
     stress with weight (W(r) / w_dx)^as_n (C_ij of Eq. 26); as_n = 0 switches it off.
+    record: the visited pairs (a, b) and grad_a W_ab are written to pairs / pair_g in
+    visiting order, for `velocity_gradient_sums`. Returns the number of pairs recorded,
+    or -1 if `pairs` is too short (the sums are complete either way).
     """
+    n_pairs = 0
+    cap_pairs = pairs.shape[0]
     for i in range(n_owned):
         for c in range(NSUMS):
             sums[i, c] = 0.0
@@ -74,6 +80,13 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
                         g0 = -dw * dx0 / r  # grad_a W_ab; grad_b W_ba = -g
                         g1 = -dw * dx1 / r
                         f2 = -2.0 * dw / r  # 2 F_ab >= 0
+                        if record:
+                            if n_pairs < cap_pairs:
+                                pairs[n_pairs, 0] = a
+                                pairs[n_pairs, 1] = b
+                                pair_g[n_pairs, 0] = g0
+                                pair_g[n_pairs, 1] = g1
+                            n_pairs += 1
                         va = vol[a]
                         vb = vol[b]
                         dv0 = v[b, 0] - v[a, 0]
@@ -169,3 +182,55 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
                                 s[20] += va * ka0 * g1
                                 s[21] += va * ka1 * g0
                                 s[22] += va * ka1 * g1
+    return n_pairs if n_pairs <= cap_pairs else -1
+
+
+@nb.njit(cache=True, error_model="numpy")
+def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, poro, vol, coupled, sums):
+    """Recompute only the velocity sums Gv (columns 4-7) and, if `coupled`, Gn (10-13) of
+    owned particles from the current `v`, over the pairs `pair_sums` recorded (same
+    positions, same order, so the sums are as partition-independent as pair_sums').
+
+    Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
+    v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure (Eq. 25)
+    rates take the new velocity, the staggered order of the leapfrog Eq. (27).
+    """
+    for i in range(n_owned):
+        for c in range(4, 8):
+            sums[i, c] = 0.0
+        if coupled:
+            for c in range(10, 14):
+                sums[i, c] = 0.0
+    for k in range(n_pairs):
+        a = pairs[k, 0]
+        b = pairs[k, 1]
+        g0 = pair_g[k, 0]
+        g1 = pair_g[k, 1]
+        dv0 = v[b, 0] - v[a, 0]
+        dv1 = v[b, 1] - v[a, 1]
+        if a < n_owned:
+            s = sums[a]
+            vb = vol[b]
+            s[4] += vb * dv0 * g0
+            s[5] += vb * dv0 * g1
+            s[6] += vb * dv1 * g0
+            s[7] += vb * dv1 * g1
+            if coupled:
+                wn = vb * (1.0 - poro[b])
+                s[10] += wn * dv0 * g0
+                s[11] += wn * dv0 * g1
+                s[12] += wn * dv1 * g0
+                s[13] += wn * dv1 * g1
+        if b < n_owned:
+            s = sums[b]
+            va = vol[a]
+            s[4] += va * dv0 * g0
+            s[5] += va * dv0 * g1
+            s[6] += va * dv1 * g0
+            s[7] += va * dv1 * g1
+            if coupled:
+                wn = va * (1.0 - poro[a])
+                s[10] += wn * dv0 * g0
+                s[11] += wn * dv0 * g1
+                s[12] += wn * dv1 * g0
+                s[13] += wn * dv1 * g1

@@ -40,11 +40,39 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, p_prev_i, alpha, beta, dt):
     return (b_i + sum_ap) / sum_a
 
 
+@nb.njit(cache=True, inline="always")
+def _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1, damping,
+              dt):
+    """dv/dt of Eq. (45): Eq. (26) (sums 23-24) + body force + damping Eq. (43)-(44) +
+    surface tractions; stored in acc and applied to v."""
+    a0 = s[23] + b0 - damping * v[i, 0]
+    a1 = s[24] + b1 - damping * v[i, 1]
+    li = int(load_index[i])
+    if li >= 0:
+        mass = rho[i] * vol[i]
+        a0 += load_value[li] * traction[i, 0] / mass
+        a1 += load_value[li] * traction[i, 1] / mass
+    acc[i, 0] = a0
+    acc[i, 1] = a1
+    v[i, 0] += dt * a0
+    v[i, 1] += dt * a1
+
+
+@nb.njit(cache=True, error_model="numpy")
+def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
+         damping, dt):
+    """The kick of the symplectic step, v^(n+1) = v^n + dt a^n (Eq. 45 at the state of
+    step n); `advance(..., kicked=True)` then takes the rates from v^(n+1)."""
+    for i in range(n_owned):
+        _momentum(i, sums[i], v, acc, rho, vol, load_index, traction, load_value, b0, b1,
+                  damping, dt)
+
+
 @nb.njit(cache=True, error_model="numpy")
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
             bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box, plastic, dp, eps_p, ponding, k_sat, c_k):
+            acc_term, correct_strain, box, plastic, dp, eps_p, ponding, k_sat, c_k, kicked):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
@@ -57,6 +85,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     accumulates the equivalent plastic strain.
     ponding: free-surface particles get p <= 0 (Section 4.4); c_k > 0: the hydraulic
     conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
+    kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
+    gradient of the new v; only the position moves with it here.
     """
     bad = -1
     inv_g = rho_l / gamma_l
@@ -125,11 +155,11 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 p_new = tpi_pressure(b_i, s[16], s[17], p[i], p_prev[i], alpha, beta, dt)
                 p_prev[i] = p[i]
                 p[i] = p_new
-            if ponding and s[0] + s[3] < 1.5 and p[i] > 0.0:
+            if ponding > 0 and s[0] + s[3] < 1.5 and (p[i] > 0.0 or ponding == 2):
                 # a free-surface particle (kernel support < 3/4 full: trace of the moment
                 # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure
                 p[i] = 0.0
-                if p_prev[i] > 0.0:
+                if p_prev[i] > 0.0 or ponding == 2:
                     p_prev[i] = 0.0
             n_new = poro[i] + dt * dn
             poro[i] = n_new
@@ -140,18 +170,9 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 e0 = poro0[i] / (1.0 - poro0[i])
                 perm[i] = k_sat * math.exp((n_new / (1.0 - n_new) - e0) / c_k)
 
-        # momentum, Eq. (45)
-        a0 = s[23] + b0 - damping * v[i, 0]
-        a1 = s[24] + b1 - damping * v[i, 1]
-        li = int(load_index[i])
-        if li >= 0:
-            mass = rho[i] * vol[i]
-            a0 += load_value[li] * traction[i, 0] / mass
-            a1 += load_value[li] * traction[i, 1] / mass
-        acc[i, 0] = a0
-        acc[i, 1] = a1
-        v[i, 0] += dt * a0
-        v[i, 1] += dt * a1
+        if not kicked:
+            _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
+                      damping, dt)
         x[i, 0] += dt * v[i, 0]
         x[i, 1] += dt * v[i, 1]
         u[i, 0] += dt * v[i, 0]

@@ -28,3 +28,44 @@ def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float) -> dict:
     scarp = float(left + 2 * dx * low[0]) if len(low) else float(x[:, 0].max())
     return {"runout_m": toe - float(x0[:, 0].max()), "toe_m": toe,
             "initial_height_m": h0, "final_height_m": height, "back_scarp_m": scarp}
+
+
+def successive_slides(times: np.ndarray, scarps: np.ndarray, h0: float,
+                      min_retreat: float) -> dict:
+    """Count the successive slides of a retrogressive failure (Section 4.5) from the
+    back-scarp position at each snapshot.
+
+    The scarp only retreats (its running minimum is taken, so debris flowing back does not
+    count). A slide is a run of consecutive snapshot intervals in which the scarp retreats,
+    with a total retreat of at least `min_retreat`; a snapshot without retreat ends it.
+    Returns the count and the time and new scarp position of each slide.
+    """
+    front = np.minimum.accumulate(scarps)
+    slides = []
+    start = None
+    for k in range(1, len(front)):
+        if front[k] < front[k - 1]:
+            if start is None:
+                start = k - 1
+            continue
+        if start is not None and front[start] - front[k - 1] >= min_retreat:
+            slides.append((float(times[start + 1]), float(front[k - 1])))
+        start = None
+    if start is not None and front[start] - front[-1] >= min_retreat:
+        slides.append((float(times[start + 1]), float(front[-1])))
+    return {"slides": len(slides), "slide_times_s": [s[0] for s in slides],
+            "slide_scarps_m": [s[1] for s in slides], "initial_height_m": h0}
+
+
+def slide_history(snaps: list[dict], dx: float) -> dict:
+    """Back-scarp position at every snapshot and the successive slides it shows
+    (`successive_slides`, a slide: a retreat of at least 5 dx)."""
+    times = np.array([s["time"] for s in snaps])
+    scarps = np.array([collapse_metrics(s["x"], s["x"] - s["u"], dx)["back_scarp_m"]
+                       for s in snaps])
+    h0 = collapse_metrics(snaps[0]["x"], snaps[0]["x"] - snaps[0]["u"], dx)["initial_height_m"]
+    out = successive_slides(times, scarps, h0, 5 * dx)
+    out.pop("initial_height_m")
+    out["back_scarp_history_m"] = scarps.tolist()
+    out["snapshot_times_s"] = times.tolist()
+    return out
