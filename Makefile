@@ -23,7 +23,8 @@ DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability \
-	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta lint clean-env
+	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-field \
+	bench-field-window lint clean-env
 
 env: $(STAMP)
 
@@ -82,6 +83,13 @@ bench-tpi-gravity: env
 # the dilative saturated collapse with and without Eq. (47), side by side (Fig. 16)
 bench-collapse-beta: env
 	$(VPY) bench/collapse_beta.py
+
+# Section 4.5 clay slope on 2 ranks: the full 40 s (about 25 min) or a 0.5 s window
+bench-field: env
+	$(VPY) bench/field.py
+
+bench-field-window: env
+	$(VPY) bench/field.py --window 0.5
 
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env

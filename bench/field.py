@@ -15,8 +15,10 @@ under 30 minutes of wall time on 2 ranks.
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
+import time
 from datetime import date
 from pathlib import Path
 
@@ -26,7 +28,7 @@ FULL = 40.0
 BAR_S = 1800.0
 
 
-def run_case(scene: str, end: float | None, out: Path) -> int:
+def run_case(scene: str, end: float | None, out: Path) -> tuple[int, str]:
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
                OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1")
@@ -34,14 +36,23 @@ def run_case(scene: str, end: float | None, out: Path) -> int:
            "--quiet"]
     if end is not None:
         cmd += ["--set", f"time.end={end}"]
-    return subprocess.run(cmd, env=env, cwd=ROOT).returncode
+    proc = subprocess.run(cmd, env=env, cwd=ROOT, stderr=subprocess.PIPE, text=True)
+    sys.stderr.write(proc.stderr)
+    return proc.returncode, proc.stderr
 
 
 def measure(scene: str, window: float | None) -> dict:
     label = "full" if window is None else f"window {window:g} s"
     out = OUT / f"field_{scene}" if window is None else OUT / f"field_{scene}_window"
-    code = run_case(scene, window, out)
-    entry = {"scene": scene, "case": label, "exit_code": code, "dir": str(out)}
+    t0 = time.perf_counter()
+    code, err = run_case(scene, window, out)
+    wall = time.perf_counter() - t0
+    entry = {"scene": scene, "case": label, "exit_code": code, "dir": str(out),
+             "bench_wall_s": wall}
+    failure = re.search(r"numerical failure: step (\d+), t = ([0-9.eE+-]+) s.*", err)
+    if failure:  # how far a failed run got (exit 3 names step and time)
+        entry.update(steps_reached=int(failure.group(1)), t_reached_s=float(failure.group(2)),
+                     failure=failure.group(0))
     summary = out / "summary.json"
     if code == 0 and summary.is_file():
         s = json.loads(summary.read_text())
@@ -61,7 +72,10 @@ def table(report: dict) -> None:
           f"{'N':>6s} {'wall s':>8s} {'Mpsteps/s/core':>14s} {'40 s wall':>10s} {'bar':>5s}")
     for e in report["entries"].values():
         if "loop_s" not in e:
-            print(f"{e['scene']:24s} {e['case']:14s} {e['exit_code']:4d}  (failed)")
+            reached = e.get("t_reached_s")
+            where = f"{reached:6.2f} {e['steps_reached']:7d}" if reached is not None else ""
+            print(f"{e['scene']:24s} {e['case']:14s} {e['exit_code']:4d} {where} "
+                  f"{'':6s} {e['bench_wall_s']:8.1f}  (failed: exit {e['exit_code']})")
             continue
         full = e["projected_full_wall_s"]
         print(f"{e['scene']:24s} {e['case']:14s} {e['exit_code']:4d} {e['t_end_s']:6.1f} "

@@ -45,7 +45,12 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
 def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     """Frames at up to 4 snapshot times: equivalent plastic strain, and for a coupled run
     the pore pressure and the mean effective stress (Figs. 14-16, 19-21)."""
-    frames = [snaps[i] for i in np.unique(np.linspace(0, len(snaps) - 1, 4).astype(int))]
+    if scene.output.times:  # the paper's frame times (Figs. 19-21), then the end
+        picks = [min(range(len(snaps)), key=lambda i: abs(snaps[i]["time"] - t))
+                 for t in scene.output.times] + [len(snaps) - 1]
+    else:
+        picks = np.linspace(0, len(snaps) - 1, 4).astype(int)
+    frames = [snaps[i] for i in np.unique(picks)]
     coupled = scene.pressure.scheme != "none"
     cols = 3 if coupled else 1
     x_all = np.concatenate([f["x"] for f in frames])
@@ -73,9 +78,10 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     if summary.is_file():
         m = json.loads(summary.read_text()).get("metrics", {}).get("collapse")
         if m:
+            slides = f", {m['slides']} slides" if "slides" in m else ""
             fig.suptitle(f"{scene.name}: run-out {m['runout_m']:.2f} m, final height "
-                         f"{m['final_height_m']:.2f} m, back scarp at {m['back_scarp_m']:.2f} m",
-                         fontsize=10)
+                         f"{m['final_height_m']:.2f} m, back scarp at {m['back_scarp_m']:.2f} m"
+                         f"{slides}", fontsize=10)
     path = out / f"{scene.name}.png"
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -150,7 +150,6 @@ class Simulation:
         self.pairs = np.zeros((n_pairs0, 2), np.int64)
         self.pair_g = np.zeros((n_pairs0, 2))
         self.n_pairs = 0
-        self.ponding = int(scene.pressure.ponding)
         self.dt, self.scheme = self.stepping.at(0.0)
         self.bad_particle = -1
         self.failure = None
@@ -290,7 +289,7 @@ class Simulation:
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      self.dp, st.eps_p, self.ponding, self.scene.material.k,
+                      self.dp, st.eps_p, self.scene.pressure.ponding, self.scene.material.k,
                       self.scene.material.C_k, self.symplectic)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)

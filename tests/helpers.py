@@ -35,7 +35,8 @@ def cell_lists(x: np.ndarray, h: float, key=None):
 def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=None,
              p_prev=None, alpha=0.0, coupled=True, n_owned=None, pairs=None):
     """The pair sums of `interactions.pair_sums` for particles at x; `pairs`: a tuple of
-    (int (m, 2), float (m, 2)) arrays that receive the recorded pairs."""
+    (int (m, 2), float (m, 2)) arrays that receive the recorded pairs; then the number
+    of pairs is returned with the sums."""
     n = len(x)
     z = np.zeros
     v = z((n, 2)) if v is None else v
@@ -47,11 +48,12 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
     p_prev = p.copy() if p_prev is None else p_prev
     cell_start, order, ncell = cell_lists(x, h)
     sums = z((n, NSUMS))
-    pair_sums(n, n if n_owned is None else n_owned, x, v, stress, p, p_prev, poro, vol, rho,
-              perm, z((n, 2)), cell_start, order, ncell, h, alpha, 0.0, 0.0, 1.0, 0.0, 0.0,
-              coupled, False, sums, z((n, 3)), 0.0, 1.0, pairs is not None,
-              *(pairs if pairs is not None else (np.zeros((0, 2), np.int64), z((0, 2)))))
-    return sums
+    record = pairs if pairs is not None else (np.zeros((0, 2), np.int64), z((0, 2)))
+    n_pairs = pair_sums(
+        n, n if n_owned is None else n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm,
+        z((n, 2)), cell_start, order, ncell, h, alpha, 0.0, 0.0, 1.0, 0.0, 0.0, coupled,
+        False, sums, z((n, 3)), 0.0, 1.0, pairs is not None, *record)
+    return sums if pairs is None else (sums, n_pairs)
 
 
 def inverse_moment(s):

@@ -155,11 +155,11 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 p_new = tpi_pressure(b_i, s[16], s[17], p[i], p_prev[i], alpha, beta, dt)
                 p_prev[i] = p[i]
                 p[i] = p_new
-            if ponding > 0 and s[0] + s[3] < 1.5 and (p[i] > 0.0 or ponding == 2):
+            if ponding and s[0] + s[3] < 1.5 and p[i] > 0.0:
                 # a free-surface particle (kernel support < 3/4 full: trace of the moment
                 # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure
                 p[i] = 0.0
-                if p_prev[i] > 0.0 or ponding == 2:
+                if p_prev[i] > 0.0:
                     p_prev[i] = 0.0
             n_new = poro[i] + dt * dn
             poro[i] = n_new
