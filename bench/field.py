@@ -51,8 +51,10 @@ def measure(scene: str, window: float | None) -> dict:
              "bench_wall_s": wall}
     failure = re.search(r"numerical failure: step (\d+), t = ([0-9.eE+-]+) s.*", err)
     if failure:  # how far a failed run got (exit 3 names step and time)
-        entry.update(steps_reached=int(failure.group(1)), t_reached_s=float(failure.group(2)),
-                     failure=failure.group(0))
+        t_reached = float(failure.group(2))
+        entry.update(steps_reached=int(failure.group(1)), t_reached_s=t_reached,
+                     failure=failure.group(0),
+                     projected_full_wall_s=wall * FULL / t_reached)  # start-up included
     summary = out / "summary.json"
     if code == 0 and summary.is_file():
         s = json.loads(summary.read_text())
@@ -74,8 +76,10 @@ def table(report: dict) -> None:
         if "loop_s" not in e:
             reached = e.get("t_reached_s")
             where = f"{reached:6.2f} {e['steps_reached']:7d}" if reached is not None else ""
+            full = e.get("projected_full_wall_s")
+            rate = f"{'':14s} {full / 60:8.1f} m" if full else ""
             print(f"{e['scene']:24s} {e['case']:14s} {e['exit_code']:4d} {where} "
-                  f"{'':6s} {e['bench_wall_s']:8.1f}  (failed: exit {e['exit_code']})")
+                  f"{'':6s} {e['bench_wall_s']:8.1f} {rate}  (failed: exit {e['exit_code']})")
             continue
         full = e["projected_full_wall_s"]
         print(f"{e['scene']:24s} {e['case']:14s} {e['exit_code']:4d} {e['t_end_s']:6.1f} "
@@ -90,12 +94,14 @@ def plot(report: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    entries = [e for e in report["entries"].values() if "stage_share" in e]
-    if not entries:
+    timed = [e for e in report["entries"].values() if "projected_full_wall_s" in e]
+    entries = [e for e in timed if "stage_share" in e]
+    if not timed:
         return
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.5))
-    labels = [f"{e['scene']}\n{e['case']}" for e in entries]
-    ax1.barh(labels, [e["projected_full_wall_s"] / 60 for e in entries], color="tab:blue")
+    labels = [f"{e['scene']}\n{e['case']}" + (f" (failed at {e['t_reached_s']:.2f} s)"
+                                              if "t_reached_s" in e else "") for e in timed]
+    ax1.barh(labels, [e["projected_full_wall_s"] / 60 for e in timed], color="tab:blue")
     ax1.axvline(BAR_S / 60, color="r", ls="--", label="bar: 30 min")
     ax1.set_xlabel("wall time for 40 s of physical time on 2 ranks (min)")
     ax1.legend()
@@ -103,7 +109,7 @@ def plot(report: dict) -> None:
     left = [0.0] * len(entries)
     for st in stages:
         w = [100 * e["stage_share"].get(st, 0.0) for e in entries]
-        ax2.barh(labels, w, left=left, label=st)
+        ax2.barh([f"{e['scene']}\n{e['case']}" for e in entries], w, left=left, label=st)
         left = [a + b for a, b in zip(left, w, strict=True)]
     ax2.set_xlabel("share of loop time (%), rank with the most")
     ax2.legend(fontsize=7, loc="lower left")

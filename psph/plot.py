@@ -55,18 +55,28 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     cols = 3 if coupled else 1
     x_all = np.concatenate([f["x"] for f in frames])
     lo, hi = x_all.min(axis=0), x_all.max(axis=0)
+    moved = np.concatenate([f["x"][f["eps_p"] > 1e-3, 0] for f in frames])
+    if hi[1] - lo[1] < 0.25 * (hi[0] - lo[0]) and len(moved):
+        lo[0] = max(lo[0], moved.min() - 0.2 * (hi[0] - moved.min()))  # a long slope: crop
     aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-9)
-    fig, axes = plt.subplots(len(frames), cols, squeeze=False,
-                             figsize=(5.5 * cols, 0.6 + len(frames) * 5.5 * aspect * 1.1))
+    wide = aspect < 0.25  # a slope: fields stacked in one column, frames one after another
+    shape = (len(frames) * cols, 1) if wide else (len(frames), cols)
+    width = 13.0 if wide else 5.5 * cols
+    fig, axes = plt.subplots(*shape, squeeze=False,
+                             figsize=(width, 0.6 + shape[0] * width * aspect * 1.25))
     for r, f in enumerate(frames):
         fields = [("eps_p", np.log10(f["eps_p"] + 1e-4), "log10 eps_p", (-4, 1), "viridis")]
         if coupled:
             mean = -(f["stress"][:, 0] + f["stress"][:, 1] + f["stress"][:, 2]) / 3e3
-            lim = max(np.abs(f["p"]).max() / 1e3, 1e-6)
-            fields += [("p", f["p"] / 1e3, "p (kPa)", (-lim, lim), "coolwarm"),
-                       ("mean", mean, "p' (kPa)", (0, max(mean.max(), 1e-6)), "magma")]
+            # colour limits from the 99.5th percentile: a few extreme particles would
+            # wash out the rest (the title gives the extremes)
+            lim = max(np.percentile(np.abs(f["p"]), 99.5) / 1e3, 1e-6)
+            top = max(np.percentile(mean, 99.5), 1e-6)
+            fields += [("p", f["p"] / 1e3, f"p (kPa; {f['p'].min() / 1e3:.0f} to "
+                        f"{f['p'].max() / 1e3:.0f})", (-lim, lim), "coolwarm"),
+                       ("mean", mean, f"p' (kPa; max {mean.max():.0f})", (0, top), "magma")]
         for c, (_, val, label, (vmin, vmax), cmap) in enumerate(fields):
-            ax = axes[r, c]
+            ax = axes[r * cols + c, 0] if wide else axes[r, c]
             sc = ax.scatter(f["x"][:, 0], f["x"][:, 1], c=val, s=1.5, cmap=cmap, vmin=vmin,
                             vmax=vmax)
             ax.set_xlim(lo[0], hi[0])

@@ -126,8 +126,9 @@ class Pressure(_Model):
     beta: Annotated[float, Field(ge=0.0)] = 0.0  # Eq. (47) for p < 0 (paper: 0.04); 0: off
     explicit_until: Annotated[float, Field(ge=0.0)] = 0.0  # s: explicit Eq. (25) before this
     acceleration_term: bool = False  # div(k dv/dt)/g of Eq. (25)/(36); see README
-    # free-surface particles cannot hold positive pore pressure (ponding, Section 4.4)
-    ponding: bool = False
+    # free-surface particles: true: cannot hold positive pore pressure (ponding, Section
+    # 4.4); "drained": p = 0 there (atmospheric, no suction either); false: no condition
+    ponding: bool | Literal["drained"] = False
 
 
 class Time(_Model):

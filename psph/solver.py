@@ -145,6 +145,8 @@ class Simulation:
         self.dp = plasticity_parameters(scene)
         self.acc_term = self.coupled and scene.pressure.acceleration_term
         self.symplectic = scene.time.integrator == "symplectic"
+        # free-surface pressure condition: 0 none, 1 ponding p <= 0, 2 drained p = 0
+        self.ponding = {False: 0, True: 1, "drained": 2}[scene.pressure.ponding]
         # pairs of the last sweep, reused by the symplectic velocity sweep
         n_pairs0 = 16 * self.store.cap if self.symplectic else 0
         self.pairs = np.zeros((n_pairs0, 2), np.int64)
@@ -289,7 +291,7 @@ class Simulation:
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      self.dp, st.eps_p, self.scene.pressure.ponding, self.scene.material.k,
+                      self.dp, st.eps_p, self.ponding, self.scene.material.k,
                       self.scene.material.C_k, self.symplectic)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)

@@ -1,5 +1,5 @@
-"""Permeability from the void ratio, Eq. (4), and the ponding condition p <= 0 on the
-free surface (Section 4.4), through one or a few coupled steps."""
+"""Permeability from the void ratio, Eq. (4), and the ponding condition p <= 0 (or the
+drained p = 0) on the free surface (Section 4.4), through one or a few coupled steps."""
 
 import numpy as np
 
@@ -46,3 +46,18 @@ def test_ponding_keeps_free_surface_pressure_non_positive():
     assert np.all(pond.store.p[:pond.store.n_owned][top(pond)] <= 0.0)
     below = pond.store.x[:pond.store.n_owned, 1] < 1.8
     assert np.all(pond.store.p[:pond.store.n_owned][below] > 4000.0)  # interior untouched
+
+
+def test_drained_free_surface_holds_no_suction_either():
+    over = ["boundaries.top.flow='impermeable'"]
+    pond = _sim(over + ["pressure.ponding=true"])
+    drained = _sim(over + ['pressure.ponding="drained"'])
+    top = lambda s: s.store.x[:s.store.n_owned, 1] > 1.95  # noqa: E731
+    for sim in (pond, drained):
+        sim.store.p[:sim.store.n_owned][top(sim)] = -5000.0  # the top layer in suction
+        sim.store.p_prev[:sim.store.n_owned][top(sim)] = -5000.0
+        sim.advance_one()
+    assert np.all(pond.store.p[:pond.store.n_owned][top(pond)] < -3000.0)  # kept by ponding
+    assert np.all(drained.store.p[:drained.store.n_owned][top(drained)] == 0.0)
+    below = drained.store.x[:drained.store.n_owned, 1] < 1.8
+    assert np.all(drained.store.p[:drained.store.n_owned][below] > 1000.0)  # interior untouched

@@ -83,7 +83,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     plastic: the elastic trial stress is returned to the Drucker-Prager surface with the
     parameters dp = (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) (Eq. 13-19) and eps_p
     accumulates the equivalent plastic strain.
-    ponding: free-surface particles get p <= 0 (Section 4.4); c_k > 0: the hydraulic
+    ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the hydraulic
     conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
     kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
     gradient of the new v; only the position moves with it here.
@@ -155,11 +155,12 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 p_new = tpi_pressure(b_i, s[16], s[17], p[i], p_prev[i], alpha, beta, dt)
                 p_prev[i] = p[i]
                 p[i] = p_new
-            if ponding and s[0] + s[3] < 1.5 and p[i] > 0.0:
+            if ponding > 0 and s[0] + s[3] < 1.5 and (p[i] > 0.0 or ponding == 2):
                 # a free-surface particle (kernel support < 3/4 full: trace of the moment
-                # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure
+                # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure, nor
+                # any when drained
                 p[i] = 0.0
-                if p_prev[i] > 0.0:
+                if p_prev[i] > 0.0 or ponding == 2:
                     p_prev[i] = 0.0
             n_new = poro[i] + dt * dn
             poro[i] = n_new
