@@ -89,6 +89,8 @@ class Material(_Model):
     g_ref: Pos = 9.81  # converts hydraulic conductivity k: gamma_l = rho_l g_ref
     # Kozeny-Carman coefficient of Eq. (4), k = k exp((e - e0) / C_k); 0: constant k
     C_k: Annotated[float, Field(ge=0.0)] = 0.0
+    # floor of the porosity of Eq. (24) (the densest state of the soil); 0: none
+    porosity_min: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.0
 
 
 class Boundary(_Model):

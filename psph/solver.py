@@ -292,7 +292,8 @@ class Simulation:
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
                       self.dp, st.eps_p, self.ponding, self.scene.material.k,
-                      self.scene.material.C_k, self.symplectic)
+                      self.scene.material.C_k, self.symplectic,
+                      self.scene.material.porosity_min)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

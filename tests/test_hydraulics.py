@@ -61,3 +61,16 @@ def test_drained_free_surface_holds_no_suction_either():
     assert np.all(drained.store.p[:drained.store.n_owned][top(drained)] == 0.0)
     below = drained.store.x[:drained.store.n_owned, 1] < 1.8
     assert np.all(drained.store.p[:drained.store.n_owned][below] > 1000.0)  # interior untouched
+
+
+def test_porosity_floor_holds():
+    floor = 0.35 - 1e-9  # the column's n0 is 0.35: any compaction reaches the floor
+    free, floored = _sim(["initial.k0=0.3"]), _sim(["initial.k0=0.3",
+                                                    f"material.porosity_min={floor}"])
+    for _ in range(200):
+        free.advance_one()
+        floored.advance_one()
+    n_free = free.store.poro[:free.store.n_owned]
+    n_floor = floored.store.poro[:floored.store.n_owned]
+    assert n_free.min() < floor  # without the floor the column compacts below it
+    assert n_floor.min() == floor and np.sum(n_floor == floor) > 0

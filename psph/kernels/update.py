@@ -72,7 +72,8 @@ def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, 
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
             bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box, plastic, dp, eps_p, ponding, k_sat, c_k, kicked):
+            acc_term, correct_strain, box, plastic, dp, eps_p, ponding, k_sat, c_k, kicked,
+            n_min):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
@@ -87,6 +88,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
     kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
     gradient of the new v; only the position moves with it here.
+    n_min: floor of the porosity (0: none).
     """
     bad = -1
     inv_g = rho_l / gamma_l
@@ -163,6 +165,10 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 if p_prev[i] > 0.0 or ponding == 2:
                     p_prev[i] = 0.0
             n_new = poro[i] + dt * dn
+            if n_new < n_min:
+                # Eq. (24) alone lets a free-surface particle (p imposed, so no pressure
+                # feedback) drift to n <= 0, where K_l / n of Eq. (25) changes sign
+                n_new = n_min
             poro[i] = n_new
             vol[i] = vol0[i] * (1.0 - poro0[i]) / (1.0 - n_new)
             rho[i] = (1.0 - n_new) * rho_s + n_new * rho_l
