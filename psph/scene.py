@@ -262,6 +262,10 @@ class Scene(_Model):
                 if b.max[d] > hi[d] + 1e-12:
                     raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
                                 f"particles outside the walls (domain.max[{d}] = {hi[d]})")
+        m = self.material
+        if not m.porosity_min < m.porosity:
+            raise _Rule("material.porosity", m.porosity,
+                        f"must be above material.porosity_min = {m.porosity_min}")
         if self.material.model == "drucker_prager" and self.material.plasticity is None:
             raise _Rule("material.plasticity", None,
                         "required for material.model = 'drucker_prager' (at least phi)")

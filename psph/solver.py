@@ -360,11 +360,13 @@ class Simulation:
 
 def _bad_field(st: ParticleStore, i: int) -> str:
     """Name and value of the first non-finite (or beyond 1e300) field of particle row i,
-    or the position of a particle that left the domain."""
+    else a porosity outside (0, 1), else the position of a particle that left the domain."""
     for name in ("p", "v", "stress", "x"):
         value = np.asarray(st.arrays[name][i])
         if not np.all(np.isfinite(value)):
             return f"{name} = {value.tolist()} (not finite)"
         if not np.all(np.abs(value) < 1e300):
             return f"{name} = {value.tolist()} (diverged)"
+    if not 0.0 < st.poro[i] < 1.0:
+        return f"n = {st.poro[i]} (porosity outside (0, 1), Eq. 24)"
     return f"x = {st.x[i].tolist()} (left the domain)"

@@ -74,3 +74,11 @@ def test_porosity_floor_holds():
     n_floor = floored.store.poro[:floored.store.n_owned]
     assert n_free.min() < floor  # without the floor the column compacts below it
     assert n_floor.min() == floor and np.sum(n_floor == floor) > 0
+
+
+def test_porosity_leaving_0_1_is_a_named_numerical_failure():
+    sim = _sim([])
+    sim.store.poro[7] = 1.2  # e.g. a particle torn apart: its volume would change sign
+    sim.advance_one()
+    step, t, pid, rank, what = sim.failure
+    assert step == 0 and pid == int(sim.store.key[7]) and what.startswith("n = 1.2")

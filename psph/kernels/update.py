@@ -191,4 +191,6 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 bad = i
             elif not (box[0] <= x[i, 0] <= box[2] and box[1] <= x[i, 1] <= box[3]):
                 bad = i
+            elif scheme != SCHEME_NONE and not (0.0 < poro[i] < 1.0):
+                bad = i  # Eq. (24) left (0, 1): K_l / n or the volume changed sign
     return bad
