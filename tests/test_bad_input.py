@@ -54,6 +54,9 @@ CASES = [
     (["--set", "decomposition.rebalance_every=1.5"], ["decomposition.rebalance_every"]),
     (["--set", "pressure.scheme='explicit'"], ["time.dt", "undrained wave limit"]),
     (["--set", "material.C_k=-2.0"], ["material.C_k", "-2.0", "greater than or equal to 0"]),
+    (["--set", "material.porosity_min=0.6"],
+     ["material.porosity", "0.4", "must be above material.porosity_min = 0.6"]),
+    (["--set", 'time.integrator="leapfrog"'], ["time.integrator", "leapfrog", "symplectic"]),
     (["--set", "pressure.ponding=1"], ["pressure.ponding", "1"]),
 ]
 

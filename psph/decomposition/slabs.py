@@ -184,19 +184,20 @@ class Slabs:
             return
         width = field.shape[1]
         reqs = []
-        sends = []
         for nbr, tag in ((self.down, 21), (self.up, 22)):
             if nbr == MPI.PROC_NULL:
                 continue
             halo_rows, (m0, nm), _, _ = self._refresh_plan[nbr]
-            buf = np.concatenate((field[halo_rows], field[m0:m0 + nm]))
-            sends.append(buf)
+            nh = len(halo_rows)
+            buf = self._send_buffer(f"refresh{tag}", nh + nm, width)[:nh + nm]
+            np.take(field, halo_rows, axis=0, out=buf[:nh])
+            buf[nh:] = field[m0:m0 + nm]
             reqs.append(self.comm.Isend(buf, dest=nbr, tag=tag))
         for nbr, tag in ((self.down, 22), (self.up, 21)):
             if nbr == MPI.PROC_NULL:
                 continue
             _, _, (h0, nh), (o0, no) = self._refresh_plan[nbr]
-            rbuf = np.empty((nh + no, width))
+            rbuf = self._send_buffer(f"refresh_in{tag}", nh + no, width)[:nh + no]
             self.comm.Recv(rbuf, source=nbr, tag=tag)
             field[h0:h0 + nh] = rbuf[:nh]
             field[o0:o0 + no] = rbuf[nh:]
