@@ -116,6 +116,9 @@ class Simulation:
                                   for s, _ in walls], float)
         self.wall_sign = np.array([_SIDE_WALL[s][2] for s, _ in walls], float)
         self.wall_fixed = np.array([b.motion == "fixed" for _, b in walls], np.bool_)
+        # ghost velocities as on a free-slip wall, for the stretching rates (interactions.py);
+        # without a fixed wall they are the velocities themselves
+        self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() else None
 
         margin = 2.0 * self.h
         self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
@@ -198,13 +201,22 @@ class Simulation:
     def _exchange(self) -> None:
         self.slabs.exchange(self.store, 2.0 * self.h)
 
+    @property
+    def v_slip(self) -> np.ndarray:
+        """Velocities with wall ghosts mirrored as on a free-slip wall (every row)."""
+        if self._v_slip is None:
+            return self.store.v
+        if self._v_slip.shape[0] < self.store.cap:
+            self._v_slip = np.zeros((self.store.cap, 2))
+        return self._v_slip
+
     def _ghosts(self) -> None:
         st = self.store
         while True:
             ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids),
                              self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
-                             st.x, st.v, st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho,
-                             st.perm, st.acc, st.key, self.head_b)
+                             st.x, st.v, self.v_slip, st.stress, st.p, st.p_prev, st.poro,
+                             st.vol, st.rho, st.perm, st.acc, st.key, self.head_b)
             if ng >= 0:
                 st.n_ghost = ng
                 return
@@ -254,8 +266,8 @@ class Simulation:
             artificial_stress(st.n_total, st.stress, st.p, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
         while True:
-            n = pair_sums(st.n_total, st.n_owned, st.x, st.v, st.stress, st.p, st.p_prev,
-                          st.poro, st.vol, st.rho, st.perm, st.acc, self.cell_start,
+            n = pair_sums(st.n_total, st.n_owned, st.x, st.v, self.v_slip, st.stress, st.p,
+                          st.p_prev, st.poro, st.vol, st.rho, st.perm, st.acc, self.cell_start,
                           self.order, self.ncell, self.h, alpha, sb.av_alpha, sb.av_beta,
                           self.soil.sound_speed, rl * self.body[0], rl * self.body[1],
                           self.coupled, self.acc_term, self.sums, self.astress, as_n,
@@ -278,7 +290,7 @@ class Simulation:
         if len(self.wall_axis):
             self._ghosts()
         velocity_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.v,
-                               st.poro, st.vol, self.coupled, self.sums)
+                               self.v_slip, st.poro, st.vol, self.coupled, self.sums)
 
     def _update(self) -> None:
         st = self.store

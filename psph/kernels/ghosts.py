@@ -3,20 +3,21 @@
 A wall is a plane x[axis] = pos with the soil on the side `sign` (+1: soil at larger x).
 Ghosts mirror the real particles (owned and halo) within `reach` (= 2h) of a wall: position
 mirrored; velocity and acceleration with the normal component reversed (free slip) or both
-reversed (fixed, no slip); effective stress mirrored (shear component reversed on a
-free-slip wall, kept on a fixed one so that the wall resists tangential motion); porosity,
-volume, density and permeability copied; pore pressure copied plus the hydrostatic
-difference rho_l b.(x_ghost - x_real), so that the total head p + psi of Eq. (25) is
-mirrored and a wall is impermeable also under gravity. Particles near two walls of
-different axes also get a corner ghost mirrored across both.
+reversed (fixed, no slip), and `v_slip` with the free-slip mirror on every wall (the
+stretching rates take it, see `interactions.py`); effective stress mirrored (shear
+component reversed on a free-slip wall, kept on a fixed one so that the wall resists
+tangential motion); porosity, volume, density and permeability copied; pore pressure
+copied plus the hydrostatic difference rho_l b.(x_ghost - x_real), so that the total
+head p + psi of Eq. (25) is mirrored and a wall is impermeable also under gravity.
+Particles near two walls of different axes also get a corner ghost mirrored across both.
 """
 
 import numba as nb
 
 
 @nb.njit(cache=True)
-def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
-            key, head_b):
+def _mirror(src, dst, axis, pos, fixed, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm,
+            acc, key, head_b):
     x[dst, 0] = x[src, 0]
     x[dst, 1] = x[src, 1]
     x[dst, axis] = 2.0 * pos - x[src, axis]
@@ -27,6 +28,7 @@ def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho,
         else:
             v[dst, d] = v[src, d]
             acc[dst, d] = acc[src, d]
+        v_slip[dst, d] = -v_slip[src, d] if d == axis else v_slip[src, d]
     stress[dst, 0] = stress[src, 0]
     stress[dst, 1] = stress[src, 1]
     stress[dst, 2] = stress[src, 2]
@@ -45,12 +47,17 @@ def _mirror(src, dst, axis, pos, fixed, x, v, stress, p, p_prev, poro, vol, rho,
 
 @nb.njit(cache=True)
 def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
-                x, v, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b):
+                x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b):
     """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
     or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
     per wall / corner, so the neighbour order is the same on any number of ranks.
-    head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift."""
+    head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift.
+    v_slip: rows 0..n_real-1 get v; ghosts get the free-slip mirror (v itself may be
+    passed when no wall is fixed)."""
     nw = wall_axis.shape[0]
+    for j in range(n_real):
+        v_slip[j, 0] = v[j, 0]
+        v_slip[j, 1] = v[j, 1]
     g = n_real
     for j in range(n_real):
         for w in range(nw):
@@ -59,8 +66,8 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 continue
             if g >= cap:
                 return -1
-            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], x, v, stress, p, p_prev,
-                    poro, vol, rho, perm, acc, key, head_b)
+            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], x, v, v_slip, stress, p,
+                    p_prev, poro, vol, rho, perm, acc, key, head_b)
             key[g] = key[j] + key_stride * (1 + w)
             g += 1
             for w2 in range(w + 1, nw):
@@ -72,8 +79,8 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 if g >= cap:
                     return -1
                 gg = g - 1
-                _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], x, v, stress, p,
-                        p_prev, poro, vol, rho, perm, acc, key, head_b)
+                _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], x, v, v_slip,
+                        stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 g += 1
     return g - n_real

@@ -9,16 +9,27 @@ applies M_i^-1 afterwards. Columns of `sums` (one row per particle):
   0-3   M[m, n]  = sum V_j r_ji^m  dW^n                     moment matrix, Eq. (22)
   4-7   Gv[a, n] = sum V_j (v_j - v_i)^a dW^n               velocity gradient, Eq. (22)
   8-9   Gp[n]    = sum V_j (p_j - p_i) dW^n                 pressure gradient, Eq. (22)
-  10-13 Gn[a, n] = sum V_j (1 - n_j)(v_j - v_i)^a dW^n      porosity rate, Eq. (24)
+  10-13 Gn[a, n] = sum V_j (1 - n_j)(v_j - v_i)^a dW^n      porosity rate, Eq. (24)*
   14-15 Q[m]     = sum V_j r_ji^m 2F_ij                     correction moment, Eq. (23)
   16    sA       = sum A_ij,  A_ij = V_j kbar_ij 2F_ij      Eq. (33) (trace of D^mn is 2)
   17    sAp      = sum A_ij p~_j,  p~ = p + alpha (p - p_prev)   Eq. (38)-(39)
   18    sApsi    = sum A_ij (psi_j - psi_i),  psi = -rho_l b.x   elevation head, Eq. (25)
   19-22 Ga[a, n] = sum V_j (k_j a_j - k_i a_i)^a dW^n       div(k dv/dt), Eq. (25)/(36)
   23-24 dvdt     = sum V_j (sigma_i + sigma_j)/rho_i . dW - sum m_j Pi_ij dW  Eq. (26)
+  25-28 Gs[a, n] = sum V_j (vs_j - vs_i)^a dW^n             stretching velocity gradient*
 
 with dW = grad_i W_ij (Eq. 21), F_ij = r_ji . grad_i W_ij / |r_ji|^2 and sigma the total
 stress sigma' - p I (Eq. 2). Only rows of owned particles (index < n_owned) are written.
+
+* Gn and Gs take `v_slip` (vs), the velocity with wall ghosts mirrored as on a free-slip
+wall; Gv takes `v`, where a fixed wall's ghosts carry -v (no slip). `update.advance`
+takes div v (Eq. 24-25) and the normal strain rates from Gs, the shear rate from Gv.
+Why: mirror ghosts exist only under the soil, so the no-slip ghost layer under soil
+sliding at U ends where the soil ends. At a debris front the particle "stretches"
+against its own ghosts by about 2U/h of spurious div v, which Eq. (24)-(25) turn into
+run-away suction. A fixed wall resists shear, not stretching along itself; the paper's
+virtual wall particles [11] line the whole base and do not have this defect. On real
+particles and on free-slip ghosts v_slip = v, so the two gradients agree there.
 """
 
 import math
@@ -28,11 +39,11 @@ import numba as nb
 from psph.kernels.neighbours import half_stencil
 from psph.kernels.spline import dw_cubic, w_cubic
 
-NSUMS = 25
+NSUMS = 29
 
 
 @nb.njit(cache=True, error_model="numpy")
-def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, acc,
+def pair_sums(n_total, n_owned, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc,
               cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
               rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx,
               record, pairs, pair_g):
@@ -91,6 +102,8 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
                         vb = vol[b]
                         dv0 = v[b, 0] - v[a, 0]
                         dv1 = v[b, 1] - v[a, 1]
+                        ds0 = v_slip[b, 0] - v_slip[a, 0]
+                        ds1 = v_slip[b, 1] - v_slip[a, 1]
                         # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
                         sxx = stress[a, 0] + stress[b, 0] - p[a] - p[b]
                         syy = stress[a, 1] + stress[b, 1] - p[a] - p[b]
@@ -125,16 +138,20 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
                             s[5] += vb * dv0 * g1
                             s[6] += vb * dv1 * g0
                             s[7] += vb * dv1 * g1
+                            s[25] += vb * ds0 * g0
+                            s[26] += vb * ds0 * g1
+                            s[27] += vb * ds1 * g0
+                            s[28] += vb * ds1 * g1
                             s[23] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
                             s[24] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
                             if coupled:
                                 s[8] += vb * dp * g0
                                 s[9] += vb * dp * g1
                                 wn = vb * (1.0 - poro[b])
-                                s[10] += wn * dv0 * g0
-                                s[11] += wn * dv0 * g1
-                                s[12] += wn * dv1 * g0
-                                s[13] += wn * dv1 * g1
+                                s[10] += wn * ds0 * g0
+                                s[11] += wn * ds0 * g1
+                                s[12] += wn * ds1 * g0
+                                s[13] += wn * ds1 * g1
                                 s[14] += vb * dx0 * f2
                                 s[15] += vb * dx1 * f2
                                 aab = vb * kbar * f2
@@ -151,16 +168,20 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
                             s[5] += va * dv0 * g1
                             s[6] += va * dv1 * g0
                             s[7] += va * dv1 * g1
+                            s[25] += va * ds0 * g0
+                            s[26] += va * ds0 * g1
+                            s[27] += va * ds1 * g0
+                            s[28] += va * ds1 * g1
                             s[23] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
                             s[24] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
                             if coupled:
                                 s[8] += va * dp * g0
                                 s[9] += va * dp * g1
                                 wn = va * (1.0 - poro[a])
-                                s[10] += wn * dv0 * g0
-                                s[11] += wn * dv0 * g1
-                                s[12] += wn * dv1 * g0
-                                s[13] += wn * dv1 * g1
+                                s[10] += wn * ds0 * g0
+                                s[11] += wn * ds0 * g1
+                                s[12] += wn * ds1 * g0
+                                s[13] += wn * ds1 * g1
                                 s[14] -= va * dx0 * f2
                                 s[15] -= va * dx1 * f2
                                 aba = va * kbar * f2
@@ -186,10 +207,12 @@ def pair_sums(n_total, n_owned, x, v, stress, p, p_prev, poro, vol, rho, perm, a
 
 
 @nb.njit(cache=True, error_model="numpy")
-def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, poro, vol, coupled, sums):
-    """Recompute only the velocity sums Gv (columns 4-7) and, if `coupled`, Gn (10-13) of
-    owned particles from the current `v`, over the pairs `pair_sums` recorded (same
-    positions, same order, so the sums are as partition-independent as pair_sums').
+def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, v_slip, poro, vol, coupled,
+                           sums):
+    """Recompute only the velocity sums Gv (columns 4-7), Gs (25-28) and, if `coupled`,
+    Gn (10-13) of owned particles from the current `v` and `v_slip`, over the pairs
+    `pair_sums` recorded (same positions, same order, so the sums are as
+    partition-independent as pair_sums').
 
     Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
     v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure (Eq. 25)
@@ -197,6 +220,8 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, poro, vol, couple
     """
     for i in range(n_owned):
         for c in range(4, 8):
+            sums[i, c] = 0.0
+        for c in range(25, 29):
             sums[i, c] = 0.0
         if coupled:
             for c in range(10, 14):
@@ -208,6 +233,8 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, poro, vol, couple
         g1 = pair_g[k, 1]
         dv0 = v[b, 0] - v[a, 0]
         dv1 = v[b, 1] - v[a, 1]
+        ds0 = v_slip[b, 0] - v_slip[a, 0]
+        ds1 = v_slip[b, 1] - v_slip[a, 1]
         if a < n_owned:
             s = sums[a]
             vb = vol[b]
@@ -215,12 +242,16 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, poro, vol, couple
             s[5] += vb * dv0 * g1
             s[6] += vb * dv1 * g0
             s[7] += vb * dv1 * g1
+            s[25] += vb * ds0 * g0
+            s[26] += vb * ds0 * g1
+            s[27] += vb * ds1 * g0
+            s[28] += vb * ds1 * g1
             if coupled:
                 wn = vb * (1.0 - poro[b])
-                s[10] += wn * dv0 * g0
-                s[11] += wn * dv0 * g1
-                s[12] += wn * dv1 * g0
-                s[13] += wn * dv1 * g1
+                s[10] += wn * ds0 * g0
+                s[11] += wn * ds0 * g1
+                s[12] += wn * ds1 * g0
+                s[13] += wn * ds1 * g1
         if b < n_owned:
             s = sums[b]
             va = vol[a]
@@ -228,9 +259,13 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, poro, vol, couple
             s[5] += va * dv0 * g1
             s[6] += va * dv1 * g0
             s[7] += va * dv1 * g1
+            s[25] += va * ds0 * g0
+            s[26] += va * ds0 * g1
+            s[27] += va * ds1 * g0
+            s[28] += va * ds1 * g1
             if coupled:
                 wn = va * (1.0 - poro[a])
-                s[10] += wn * dv0 * g0
-                s[11] += wn * dv0 * g1
-                s[12] += wn * dv1 * g0
-                s[13] += wn * dv1 * g1
+                s[10] += wn * ds0 * g0
+                s[11] += wn * ds0 * g1
+                s[12] += wn * ds1 * g0
+                s[13] += wn * ds1 * g1

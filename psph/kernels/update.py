@@ -95,19 +95,20 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     for i in range(n_owned):
         s = sums[i]
         m00, m01, m10, m11 = _inverse_moment(s)
-        # velocity gradient L[a, b] = dv_a/dx_b = Gv[a, n] Minv[n, b]   (Eq. 22)
-        l00 = s[4] * m00 + s[5] * m10
+        # velocity gradient L[a, b] = dv_a/dx_b = G[a, n] Minv[n, b]   (Eq. 22): the
+        # stretching (diagonal) from Gs, the shear from Gv (interactions.py: fixed walls)
+        l00 = s[25] * m00 + s[26] * m10
         l01 = s[4] * m01 + s[5] * m11
         l10 = s[6] * m00 + s[7] * m10
-        l11 = s[6] * m01 + s[7] * m11
+        l11 = s[27] * m01 + s[28] * m11
         div_v = l00 + l11
         if not correct_strain:
             # strain rate and spin from the plain kernel gradient (Bui et al. 2008): the
             # corrected one excites a growing zig-zag mode at free surfaces (README)
-            l00 = s[4]
+            l00 = s[25]
             l01 = s[5]
             l10 = s[6]
-            l11 = s[7]
+            l11 = s[28]
 
         # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
         e01 = 0.5 * (l01 + l10)

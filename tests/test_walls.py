@@ -1,0 +1,72 @@
+"""Mirror-ghost walls in the pair sums: a fixed (no-slip) wall resists shear but does not
+feign stretching along itself (`interactions.py`, the Gs columns)."""
+
+import numpy as np
+import pytest
+
+from psph.kernels.ghosts import make_ghosts
+from tests.helpers import inverse_moment, sums_for
+
+DX = 0.1
+H = 1.3 * DX
+
+
+def _block_on_wall(fixed: bool, velocity: tuple[float, float]):
+    """A 12 x 6 lattice block on the wall y = 0 (soil above), moving rigidly at
+    `velocity`, with its ghosts; returns the sums and the number of real particles."""
+    g = (np.arange(12) + 0.5) * DX
+    gy = (np.arange(6) + 0.5) * DX
+    x_real = np.array(np.meshgrid(g, gy)).reshape(2, -1).T
+    n = len(x_real)
+    cap = 4 * n
+    z = np.zeros
+    x = z((cap, 2))
+    x[:n] = x_real
+    v = z((cap, 2))
+    v[:n] = velocity
+    v_slip = z((cap, 2))
+    stress, p, p_prev = z((cap, 4)), z(cap), z(cap)
+    poro, vol = np.full(cap, 0.4), np.full(cap, DX * DX)
+    rho, perm, acc, key = np.ones(cap), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float)
+    ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([0.0]),
+                     np.array([1.0]), np.array([fixed]), x, v, v_slip, stress, p, p_prev,
+                     poro, vol, rho, perm, acc, key, np.zeros(2))
+    assert ng > 0
+    m = n + ng
+    sums = sums_for(x[:m], H, vol[:m], v=v[:m], poro=poro[:m], n_owned=n, v_slip=v_slip[:m])
+    return sums[:n], x_real
+
+
+def _gradient(sums, cols):
+    g = sums[:, cols].reshape(-1, 2, 2)
+    return g @ inverse_moment(sums)
+
+
+@pytest.mark.parametrize("fixed", [True, False])
+def test_a_block_sliding_on_a_wall_does_not_stretch(fixed):
+    sums, x = _block_on_wall(fixed, (5.0, 0.0))
+    stretch = _gradient(sums, [25, 26, 27, 28])
+    div_v = stretch[:, 0, 0] + stretch[:, 1, 1]
+    # rigid translation: no volume change anywhere, the block's front corner included
+    assert np.abs(div_v).max() < 1e-9
+    # Eq. (24): the porosity rate of a rigid motion is zero too
+    gn = _gradient(sums, [10, 11, 12, 13])
+    assert np.abs(gn[:, 0, 0] + gn[:, 1, 1]).max() < 1e-9
+
+
+def test_a_fixed_wall_still_resists_sliding_by_shear():
+    sums, x = _block_on_wall(True, (5.0, 0.0))
+    bottom = x[:, 1] < DX
+    # the plain shear rate du/dy of the bottom row sees the no-slip ghosts (-v)
+    du_dy = sums[bottom, 5]
+    assert (du_dy > 0.5 * 5.0 / DX).all()
+    # the no-slip velocity gradient itself stretches the block's corners: this is what
+    # Eq. (24)-(25) took before the Gs columns (run-away suction at a debris front)
+    full = _gradient(sums, [4, 5, 6, 7])
+    front = bottom & (x[:, 0] > 1.1)
+    assert (full[front, 0, 0] + full[front, 1, 1] > 1.0 / DX).all()
+
+
+def test_free_slip_ghosts_give_identical_gradients():
+    sums, _ = _block_on_wall(False, (5.0, -1.0))
+    assert np.array_equal(sums[:, [4, 5, 6, 7]], sums[:, [25, 26, 27, 28]])
