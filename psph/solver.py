@@ -266,9 +266,10 @@ class Simulation:
             artificial_stress(st.n_total, st.stress, st.p, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
         while True:
-            n = pair_sums(st.n_total, st.n_owned, st.x, st.v, self.v_slip, st.stress, st.p,
-                          st.p_prev, st.poro, st.vol, st.rho, st.perm, st.acc, self.cell_start,
-                          self.order, self.ncell, self.h, alpha, sb.av_alpha, sb.av_beta,
+            n = pair_sums(st.n_total, st.n_owned, st.n_real, st.x, st.v, self.v_slip,
+                          st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
+                          st.acc, self.cell_start, self.order, self.ncell, self.h, alpha,
+                          sb.av_alpha, sb.av_beta,
                           self.soil.sound_speed, rl * self.body[0], rl * self.body[1],
                           self.coupled, self.acc_term, self.sums, self.astress, as_n,
                           self.w_dx, self.symplectic, self.pairs, self.pair_g)
@@ -289,7 +290,7 @@ class Simulation:
         self.slabs.refresh_halo(st.v)
         if len(self.wall_axis):
             self._ghosts()
-        velocity_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.v,
+        velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g, st.v,
                                self.v_slip, st.poro, st.vol, self.coupled, self.sums)
 
     def _update(self) -> None:

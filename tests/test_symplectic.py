@@ -32,7 +32,7 @@ def test_velocity_sweep_over_recorded_pairs_equals_pair_sums():
     pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
     sums, n_pairs = sums_for(x, 1.3 * dx, vol, v=v_old, poro=poro, pairs=pairs)
     assert n_pairs > 4 * n
-    velocity_gradient_sums(n, n_pairs, pairs[0], pairs[1], v_new, v_new, poro, vol, True,
+    velocity_gradient_sums(n, n, n_pairs, pairs[0], pairs[1], v_new, v_new, poro, vol, True,
                            sums)
     expected = sums_for(x, 1.3 * dx, vol, v=v_new, poro=poro)
     # same pairs, same order: the same floating-point sums
@@ -51,7 +51,7 @@ def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():
     out = []
     for cap in (3, 10 * n * 40):
         sums = z((n, NSUMS))
-        got = pair_sums(n, n, x, z((n, 2)), z((n, 2)), z((n, 4)), z(n), z(n), np.full(n, 0.4),
+        got = pair_sums(n, n, n, x, z((n, 2)), z((n, 2)), z((n, 4)), z(n), z(n), np.full(n, 0.4),
                         np.full(n, dx * dx), np.ones(n), np.ones(n), z((n, 2)), cell_start,
                         order, ncell, h, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, True, False, sums,
                         z((n, 3)), 0.0, 1.0, True, z((cap, 2), np.int64), z((cap, 2)))

@@ -16,20 +16,22 @@ applies M_i^-1 afterwards. Columns of `sums` (one row per particle):
   18    sApsi    = sum A_ij (psi_j - psi_i),  psi = -rho_l b.x   elevation head, Eq. (25)
   19-22 Ga[a, n] = sum V_j (k_j a_j - k_i a_i)^a dW^n       div(k dv/dt), Eq. (25)/(36)
   23-24 dvdt     = sum V_j (sigma_i + sigma_j)/rho_i . dW - sum m_j Pi_ij dW  Eq. (26)
-  25-28 Gs[a, n] = sum V_j (vs_j - vs_i)^a dW^n             stretching velocity gradient*
+  25-28 Gs[a, n] = sum V_j (vs_j - vs_i - v_j + v_i)^a dW^n  stretching correction*
 
 with dW = grad_i W_ij (Eq. 21), F_ij = r_ji . grad_i W_ij / |r_ji|^2 and sigma the total
 stress sigma' - p I (Eq. 2). Only rows of owned particles (index < n_owned) are written.
 
-* Gn and Gs take `v_slip` (vs), the velocity with wall ghosts mirrored as on a free-slip
-wall; Gv takes `v`, where a fixed wall's ghosts carry -v (no slip). `update.advance`
-takes div v (Eq. 24-25) and the normal strain rates from Gs, the shear rate from Gv.
+* Rows n_real.. are wall ghosts. On them `v_slip` (vs) holds the velocity mirrored as on
+a free-slip wall, where `v` holds -v on a fixed (no-slip) wall. Gn takes vs, and
+Gv + Gs is the velocity gradient with vs; only pairs with a ghost add to Gs.
+`update.advance` takes div v (Eq. 24-25) and the normal strain rates from Gv + Gs, the
+shear rate from Gv.
 Why: mirror ghosts exist only under the soil, so the no-slip ghost layer under soil
 sliding at U ends where the soil ends. At a debris front the particle "stretches"
 against its own ghosts by about 2U/h of spurious div v, which Eq. (24)-(25) turn into
 run-away suction. A fixed wall resists shear, not stretching along itself; the paper's
-virtual wall particles [11] line the whole base and do not have this defect. On real
-particles and on free-slip ghosts v_slip = v, so the two gradients agree there.
+virtual wall particles [11] line the whole base and do not have this defect. On
+free-slip ghosts vs = v, so Gs = 0 without a fixed wall.
 """
 
 import math
@@ -43,12 +45,14 @@ NSUMS = 29
 
 
 @nb.njit(cache=True, error_model="numpy")
-def pair_sums(n_total, n_owned, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc,
+def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc,
               cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
               rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx,
               record, pairs, pair_g):
     """Accumulate the sums listed in the module docstring for particles 0..n_owned-1.
 
+    n_real: rows n_real..n_total-1 are wall ghosts, whose `v_slip` (free-slip mirror)
+    enters Gn and Gs (see the module docstring).
     coupled: pressure-related sums (Gp, Gn, Q, sA, sAp, sApsi) are computed;
     acc_term: the div(k dv/dt) sums (Ga) are computed. rho_l_b = rho_l * body force (N/m^3).
     astress: (cap, 3) artificial stress R (xx, yy, xy) of every row, added to the pair
@@ -102,8 +106,12 @@ def pair_sums(n_total, n_owned, x, v, v_slip, stress, p, p_prev, poro, vol, rho,
                         vb = vol[b]
                         dv0 = v[b, 0] - v[a, 0]
                         dv1 = v[b, 1] - v[a, 1]
-                        ds0 = v_slip[b, 0] - v_slip[a, 0]
-                        ds1 = v_slip[b, 1] - v_slip[a, 1]
+                        ghost_pair = a >= n_real or b >= n_real
+                        ds0 = dv0
+                        ds1 = dv1
+                        if ghost_pair:
+                            ds0 = v_slip[b, 0] - v_slip[a, 0]
+                            ds1 = v_slip[b, 1] - v_slip[a, 1]
                         # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
                         sxx = stress[a, 0] + stress[b, 0] - p[a] - p[b]
                         syy = stress[a, 1] + stress[b, 1] - p[a] - p[b]
@@ -138,10 +146,11 @@ def pair_sums(n_total, n_owned, x, v, v_slip, stress, p, p_prev, poro, vol, rho,
                             s[5] += vb * dv0 * g1
                             s[6] += vb * dv1 * g0
                             s[7] += vb * dv1 * g1
-                            s[25] += vb * ds0 * g0
-                            s[26] += vb * ds0 * g1
-                            s[27] += vb * ds1 * g0
-                            s[28] += vb * ds1 * g1
+                            if ghost_pair:
+                                s[25] += vb * (ds0 - dv0) * g0
+                                s[26] += vb * (ds0 - dv0) * g1
+                                s[27] += vb * (ds1 - dv1) * g0
+                                s[28] += vb * (ds1 - dv1) * g1
                             s[23] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
                             s[24] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
                             if coupled:
@@ -168,10 +177,11 @@ def pair_sums(n_total, n_owned, x, v, v_slip, stress, p, p_prev, poro, vol, rho,
                             s[5] += va * dv0 * g1
                             s[6] += va * dv1 * g0
                             s[7] += va * dv1 * g1
-                            s[25] += va * ds0 * g0
-                            s[26] += va * ds0 * g1
-                            s[27] += va * ds1 * g0
-                            s[28] += va * ds1 * g1
+                            if ghost_pair:
+                                s[25] += va * (ds0 - dv0) * g0
+                                s[26] += va * (ds0 - dv0) * g1
+                                s[27] += va * (ds1 - dv1) * g0
+                                s[28] += va * (ds1 - dv1) * g1
                             s[23] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
                             s[24] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
                             if coupled:
@@ -207,10 +217,11 @@ def pair_sums(n_total, n_owned, x, v, v_slip, stress, p, p_prev, poro, vol, rho,
 
 
 @nb.njit(cache=True, error_model="numpy")
-def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, v_slip, poro, vol, coupled,
+def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, poro, vol, coupled,
                            sums):
     """Recompute only the velocity sums Gv (columns 4-7), Gs (25-28) and, if `coupled`,
-    Gn (10-13) of owned particles from the current `v` and `v_slip`, over the pairs
+    Gn (10-13) of owned particles from the current `v` and `v_slip` (rows n_real..:
+    wall ghosts), over the pairs
     `pair_sums` recorded (same positions, same order, so the sums are as
     partition-independent as pair_sums').
 
@@ -233,8 +244,12 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, v_slip, poro, vol
         g1 = pair_g[k, 1]
         dv0 = v[b, 0] - v[a, 0]
         dv1 = v[b, 1] - v[a, 1]
-        ds0 = v_slip[b, 0] - v_slip[a, 0]
-        ds1 = v_slip[b, 1] - v_slip[a, 1]
+        ghost_pair = a >= n_real or b >= n_real
+        ds0 = dv0
+        ds1 = dv1
+        if ghost_pair:
+            ds0 = v_slip[b, 0] - v_slip[a, 0]
+            ds1 = v_slip[b, 1] - v_slip[a, 1]
         if a < n_owned:
             s = sums[a]
             vb = vol[b]
@@ -242,10 +257,11 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, v_slip, poro, vol
             s[5] += vb * dv0 * g1
             s[6] += vb * dv1 * g0
             s[7] += vb * dv1 * g1
-            s[25] += vb * ds0 * g0
-            s[26] += vb * ds0 * g1
-            s[27] += vb * ds1 * g0
-            s[28] += vb * ds1 * g1
+            if ghost_pair:
+                s[25] += vb * (ds0 - dv0) * g0
+                s[26] += vb * (ds0 - dv0) * g1
+                s[27] += vb * (ds1 - dv1) * g0
+                s[28] += vb * (ds1 - dv1) * g1
             if coupled:
                 wn = vb * (1.0 - poro[b])
                 s[10] += wn * ds0 * g0
@@ -259,10 +275,11 @@ def velocity_gradient_sums(n_owned, n_pairs, pairs, pair_g, v, v_slip, poro, vol
             s[5] += va * dv0 * g1
             s[6] += va * dv1 * g0
             s[7] += va * dv1 * g1
-            s[25] += va * ds0 * g0
-            s[26] += va * ds0 * g1
-            s[27] += va * ds1 * g0
-            s[28] += va * ds1 * g1
+            if ghost_pair:
+                s[25] += va * (ds0 - dv0) * g0
+                s[26] += va * (ds0 - dv0) * g1
+                s[27] += va * (ds1 - dv1) * g0
+                s[28] += va * (ds1 - dv1) * g1
             if coupled:
                 wn = va * (1.0 - poro[a])
                 s[10] += wn * ds0 * g0

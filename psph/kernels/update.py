@@ -96,19 +96,22 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         s = sums[i]
         m00, m01, m10, m11 = _inverse_moment(s)
         # velocity gradient L[a, b] = dv_a/dx_b = G[a, n] Minv[n, b]   (Eq. 22): the
-        # stretching (diagonal) from Gs, the shear from Gv (interactions.py: fixed walls)
-        l00 = s[25] * m00 + s[26] * m10
+        # stretching (diagonal) from Gv + Gs, the shear from Gv (interactions.py: a fixed
+        # wall resists shear, not stretching along itself)
+        gs00 = s[4] + s[25]
+        gs11 = s[7] + s[28]
+        l00 = gs00 * m00 + (s[5] + s[26]) * m10
         l01 = s[4] * m01 + s[5] * m11
         l10 = s[6] * m00 + s[7] * m10
-        l11 = s[27] * m01 + s[28] * m11
+        l11 = (s[6] + s[27]) * m01 + gs11 * m11
         div_v = l00 + l11
         if not correct_strain:
             # strain rate and spin from the plain kernel gradient (Bui et al. 2008): the
             # corrected one excites a growing zig-zag mode at free surfaces (README)
-            l00 = s[25]
+            l00 = gs00
             l01 = s[5]
             l10 = s[6]
-            l11 = s[28]
+            l11 = gs11
 
         # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
         e01 = 0.5 * (l01 + l10)
