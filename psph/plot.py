@@ -93,7 +93,8 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
                          f"{m['final_height_m']:.2f} m, back scarp at {m['back_scarp_m']:.2f} m"
                          f"{slides}", fontsize=10)
     path = out / f"{scene.name}.png"
-    fig.tight_layout()
+    # keep the suptitle clear of the first frame's title on a tall stack of frames
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.3 / fig.get_size_inches()[1]))
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path

@@ -23,8 +23,10 @@ def test_job_script_syntax(script):
 @pytest.mark.skipif(shutil.which("mpirun") is None, reason="needs mpirun")
 def test_local_launcher_finishes_a_run_over_several_segments(tmp_path):
     out = tmp_path / "run"
-    env = dict(os.environ, NP="2", WALL="7", MAX_SEGMENTS="12",
-               EXTRA="--set particles.dx=0.02 --set material.k=8e-4 --set time.end=0.5 "
+    # 0.2 s is several 7 s segments on an idle machine; the segment budget leaves room
+    # for a loaded one (the test is about continuity across segments, not speed)
+    env = dict(os.environ, NP="2", WALL="7", MAX_SEGMENTS="40",
+               EXTRA="--set particles.dx=0.02 --set material.k=8e-4 --set time.end=0.2 "
                      "--set verification.tv=[] --set output.interval=0.05")
     r = subprocess.run([str(JOBS / "local.sh"), "terzaghi", str(out)], env=env,
                        capture_output=True, text=True, timeout=600)
@@ -34,5 +36,5 @@ def test_local_launcher_finishes_a_run_over_several_segments(tmp_path):
     assert summary["status"] == "finished" and summary["restarted_from"]
     steps = [s["step"] for s in read_snapshots(out / "particles.h5")]
     times = [s["time"] for s in read_snapshots(out / "particles.h5")]
-    assert steps == sorted(set(steps)) and abs(times[-1] - 0.5) < 5e-6  # within one step
-    assert len(steps) == 11  # t = 0, 0.05, ..., 0.5: none lost or doubled across segments
+    assert steps == sorted(set(steps)) and abs(times[-1] - 0.2) < 5e-6  # within one step
+    assert len(steps) == 5  # t = 0, 0.05, ..., 0.2: none lost or doubled across segments
