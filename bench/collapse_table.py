@@ -12,6 +12,7 @@ bench/out/collapse_table.json.
 
 import json
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -24,10 +25,10 @@ from psph.verify.collapse import collapse_metrics  # noqa: E402
 
 CASES = {"-5": "collapse_saturated_psi-5", "0": "collapse_saturated_psi0",
          "2.5": "collapse_saturated_psi2.5"}
-DX = 0.04  # Table 1
 
 
 def case_row(run: Path) -> dict:
+    dx = tomllib.loads((run / "scene.toml").read_text())["particles"]["dx"]
     snaps = read_snapshots(run / "particles.h5")
     first = snaps[0]
     p0 = dict(zip(first["id"].tolist(), first["p"].tolist(), strict=True))
@@ -40,8 +41,8 @@ def case_row(run: Path) -> dict:
         excess_min = min(excess_min, float(excess.min()))
     at = min(snaps, key=lambda s: abs(s["time"] - 0.6))
     end = snaps[-1]
-    m_at = collapse_metrics(at["x"], x0, DX)
-    m_end = collapse_metrics(end["x"], x0, DX)
+    m_at = collapse_metrics(at["x"], x0, dx)
+    m_end = collapse_metrics(end["x"], x0, dx)
     return {"runout_0.6_m": m_at["runout_m"], "t_end_s": end["time"],
             "runout_end_m": m_end["runout_m"], "excess_max_kPa": excess_max / 1e3,
             "excess_min_kPa": excess_min / 1e3, "back_scarp_end_m": m_end["back_scarp_m"]}

@@ -23,21 +23,31 @@ def _cloud(n_side=12, seed=3):
     return x, dx, rng
 
 
-def test_velocity_sweep_over_recorded_pairs_equals_pair_sums():
+@pytest.mark.parametrize("n_ghost", [0, 30])
+def test_velocity_sweep_over_recorded_pairs_equals_pair_sums(n_ghost):
+    """With n_ghost > 0 the last rows stand for wall ghosts whose free-slip velocity
+    (v_slip) differs from v, so the stretching correction Gs is exercised too."""
     x, dx, rng = _cloud()
     n = len(x)
+    n_real = n - n_ghost
     vol = np.full(n, dx * dx)
     poro = rng.uniform(0.3, 0.5, n)
     v_old, v_new = rng.normal(size=(n, 2)), rng.normal(size=(n, 2))
+    slip_old, slip_new = v_old.copy(), v_new.copy()
+    slip_old[n_real:, 0] *= -1.0
+    slip_new[n_real:, 0] *= -1.0
     pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
-    sums, n_pairs = sums_for(x, 1.3 * dx, vol, v=v_old, poro=poro, pairs=pairs)
+    sums, n_pairs = sums_for(x, 1.3 * dx, vol, v=v_old, poro=poro, pairs=pairs,
+                             v_slip=slip_old, n_owned=n_real, n_real=n_real)
     assert n_pairs > 4 * n
-    velocity_gradient_sums(n, n, n_pairs, pairs[0], pairs[1], v_new, v_new, poro, vol, True,
-                           sums)
-    expected = sums_for(x, 1.3 * dx, vol, v=v_new, poro=poro)
+    velocity_gradient_sums(n_real, n_real, n_pairs, pairs[0], pairs[1], v_new, slip_new,
+                           poro, vol, True, sums)
+    expected = sums_for(x, 1.3 * dx, vol, v=v_new, poro=poro, v_slip=slip_new,
+                        n_owned=n_real, n_real=n_real)
     # same pairs, same order: the same floating-point sums
     assert np.array_equal(sums[:, VELOCITY_COLUMNS], expected[:, VELOCITY_COLUMNS])
     assert np.array_equal(sums[:, :4], expected[:, :4])  # the rest is left alone
+    assert sums[:n_real, 25:29].any() == (n_ghost > 0)
 
 
 def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():

@@ -28,10 +28,10 @@ Gv + Gs is the velocity gradient with vs; only pairs with a ghost add to Gs.
 shear rate from Gv.
 Why: mirror ghosts exist only under the soil, so the no-slip ghost layer under soil
 sliding at U ends where the soil ends. At a debris front the particle "stretches"
-against its own ghosts by about 2U/h of spurious div v, which Eq. (24)-(25) turn into
-run-away suction. A fixed wall resists shear, not stretching along itself; the paper's
-virtual wall particles [11] line the whole base and do not have this defect. On
-free-slip ghosts vs = v, so Gs = 0 without a fixed wall.
+against its own ghosts by about 0.4 U/dx of spurious div v (tests/test_walls.py), which
+Eq. (24)-(25) turn into run-away suction. A fixed wall resists shear, not stretching
+along itself; the paper's virtual wall particles [11] line the whole base and do not
+have this defect. On free-slip ghosts vs = v, so Gs = 0 without a fixed wall.
 """
 
 import math
@@ -221,9 +221,8 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
                            sums):
     """Recompute only the velocity sums Gv (columns 4-7), Gs (25-28) and, if `coupled`,
     Gn (10-13) of owned particles from the current `v` and `v_slip` (rows n_real..:
-    wall ghosts), over the pairs
-    `pair_sums` recorded (same positions, same order, so the sums are as
-    partition-independent as pair_sums').
+    wall ghosts), over the pairs `pair_sums` recorded (same positions, same order, so
+    the sums are as partition-independent as pair_sums').
 
     Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
     v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure (Eq. 25)
