@@ -20,6 +20,7 @@ from psph.errors import SceneError  # noqa: E402
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import validate  # noqa: E402
 from psph.verify import terzaghi  # noqa: E402
+from psph.verify.pressure import excess_pressure  # noqa: E402
 
 
 def plot_run(out: Path, field: str = "p") -> list[Path]:
@@ -44,7 +45,9 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
 
 def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     """Frames at up to 4 snapshot times: equivalent plastic strain, and for a coupled run
-    the pore pressure and the mean effective stress (Figs. 14-16, 19-21)."""
+    the excess pore pressure (p minus the hydrostatic p of the water table at the
+    particle's current position, `psph.verify.pressure.excess_pressure`) and the mean
+    effective stress (Figs. 14-17, 19-21, 24-25)."""
     if scene.output.times:  # the paper's frame times (Figs. 19-21), then the end
         picks = [min(range(len(snaps)), key=lambda i: abs(snaps[i]["time"] - t))
                  for t in scene.output.times] + [len(snaps) - 1]
@@ -68,12 +71,15 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
         fields = [("eps_p", np.log10(f["eps_p"] + 1e-4), "log10 eps_p", (-4, 1), "viridis")]
         if coupled:
             mean = -(f["stress"][:, 0] + f["stress"][:, 1] + f["stress"][:, 2]) / 3e3
+            # excess over the hydrostatic p of the water table at the current position,
+            # as Figs. 14-17, 20 and 24 show (psph/verify/pressure.py)
+            ex = excess_pressure(f, scene) / 1e3
             # colour limits from the 99.5th percentile: a few extreme particles would
-            # wash out the rest (the title gives the extremes)
-            lim = max(np.percentile(np.abs(f["p"]), 99.5) / 1e3, 1e-6)
+            # wash out the rest (the title gives the extremes); symmetric about 0
+            lim = max(np.percentile(np.abs(ex), 99.5), 1e-6)
             top = max(np.percentile(mean, 99.5), 1e-6)
-            fields += [("p", f["p"] / 1e3, f"p (kPa; {f['p'].min() / 1e3:.0f} to "
-                        f"{f['p'].max() / 1e3:.0f})", (-lim, lim), "coolwarm"),
+            fields += [("excess p", ex, f"excess p (kPa; {ex.min():.0f} to {ex.max():.0f})",
+                        (-lim, lim), "RdBu_r"),
                        ("mean", mean, f"p' (kPa; max {mean.max():.0f})", (0, top), "magma")]
         for c, (_, val, label, (vmin, vmax), cmap) in enumerate(fields):
             ax = axes[r * cols + c, 0] if wide else axes[r, c]

@@ -179,6 +179,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
 
     try:
         if meta is None:
+            sim.equilibrate()
             snapshot()
             pending.pop(0)
             diagnostics()
@@ -248,6 +249,10 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, stat
                                                      scene.particles.dx),
                         "time_s": last["time"]}
         verification["collapse"].update(slide_history(snaps, scene.particles.dx))
+        if scene.pressure.scheme != "none":
+            from psph.verify.pressure import pressure_quality
+
+            verification["pressure_quality"] = pressure_quality(snaps, scene)
         if history:
             verification["p_max_Pa"] = max(r["p_max"] for r in history)
             verification["p_min_Pa"] = min(r["p_min"] for r in history)
@@ -346,6 +351,8 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
         },
         "stage_seconds": stages,
     }
+    if sim.equilibrium:
+        summary["equilibrate"] = sim.equilibrium
     if monitor is not None:
         summary["errors"] = monitor.errors()
     return summary

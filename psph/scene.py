@@ -150,6 +150,9 @@ class Stabilisation(_Model):
     av_beta: Annotated[float, Field(ge=0.0)] = 0.1
     corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
     shepard_every: Annotated[int, Field(ge=0)] = 0  # m of Eq. (46): filter p every m steps
+    # with the Shepard step, also filter the effective stress (stress regularisation, the
+    # paper's ref. [14]): the odd-even mode of sigma' has no other damping (issue 13)
+    shepard_stress: bool = False
     # artificial stress in C_ij of Eq. (26) (refs. [11, 18]): epsilon and exponent n;
     # default epsilon: 0.5 for Drucker-Prager soil, 0 (off) for elastic
     artificial_stress: Annotated[float, Field(ge=0.0)] | None = None
@@ -188,6 +191,11 @@ class Initial(_Model):
     # follows the ground surface (p = rho_l |g| depth below the top of each column)
     water_table: float | Literal["surface"] | None = None
     k0: Annotated[float, Field(gt=0.0)] | None = None  # sigma'_h = K0 sigma'_v; none: zero
+    # s of gravity loading before t = 0 (Section 4.5): the skeleton relaxes from the K0
+    # state to equilibrium under free faces, with p held hydrostatic and global damping
+    # eta_d = equilibrate_damping (Eq. 43-44); then u = v = 0. 0: start from the K0 state
+    equilibrate: Annotated[float, Field(ge=0.0)] = 0.0
+    equilibrate_damping: Annotated[float, Field(gt=0.0)] = 0.1
 
 
 class Decomposition(_Model):

@@ -7,6 +7,7 @@ that changes control flow comes from a collective or from values identical on al
 (time, step).
 """
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -17,7 +18,7 @@ from psph.kernels.artificial_stress import artificial_stress
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import NSUMS, pair_sums, velocity_gradient_sums
 from psph.kernels.neighbours import bin_particles, grid_bounds
-from psph.kernels.shepard import shepard_pressure
+from psph.kernels.shepard import shepard_pressure, shepard_stress
 from psph.kernels.spline import w_cubic
 from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance, kick
 from psph.particles import ParticleStore
@@ -136,6 +137,7 @@ class Simulation:
         self.astress = np.zeros((1, 3))
         self.w_dx = w_cubic(scene.particles.dx, self.h)
         self.scratch = np.zeros((2, self.store.cap))
+        self.scratch_stress = np.zeros((0, 4))
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
@@ -158,6 +160,7 @@ class Simulation:
         self.dt, self.scheme = self.stepping.at(0.0)
         self.bad_particle = -1
         self.failure = None
+        self.equilibrium = {}  # what `equilibrate` did
         self.stages = self._assemble()
 
     # ------------------------------------------------------------------ pipeline
@@ -177,7 +180,8 @@ class Simulation:
         stages.append(Stage("neighbours", self._neighbours))
         m = self.scene.stabilisation.shepard_every
         if self.coupled and m > 0:
-            stages.append(Stage(f"shepard[every {m}]", self._shepard, every=m))
+            name = "shepard+stress" if self.scene.stabilisation.shepard_stress else "shepard"
+            stages.append(Stage(f"{name}[every {m}]", self._shepard, every=m))
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
         stages.append(Stage(name, self._interactions))
@@ -247,6 +251,12 @@ class Simulation:
         shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
                          st.drained_from, self.t, self.cell_start, self.order, self.ncell,
                          self.h, self.scratch[0], self.scratch[1])
+        if self.scene.stabilisation.shepard_stress:
+            if self.scratch_stress.shape[0] < st.cap:
+                self.scratch_stress = np.zeros((st.cap, 4))
+            shepard_stress(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
+                           self.order, self.ncell, self.h, self.scratch_stress,
+                           self.scratch[0])
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()
@@ -263,7 +273,7 @@ class Simulation:
         if sb.artificial_stress > 0.0:
             if self.astress.shape[0] < st.cap:
                 self.astress = np.zeros((st.cap, 3))
-            artificial_stress(st.n_total, st.stress, st.p, sb.artificial_stress, self.astress)
+            artificial_stress(st.n_total, st.stress, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
         while True:
             n = pair_sums(st.n_total, st.n_owned, st.n_real, st.x, st.v, self.v_slip,
@@ -356,6 +366,47 @@ class Simulation:
             stage.calls += 1
         self.t += self.dt
         self.step += 1
+
+    def equilibrate(self) -> dict:
+        """Gravity loading before t = 0 (collective; Section 4.5: "followed by
+        gravitational loading to obtain the initial in-situ stress conditions").
+
+        The K0 state of `initial.k0` is in equilibrium only under level ground: under a
+        slope face or at the free end of a block it unloads at t = 0, and a nearly
+        undrained soil answers that unloading with suction (issue 13, cause 4). For
+        `initial.equilibrate` seconds the step pipeline runs with the pore pressure held
+        at its hydrostatic value (drained, the steady state of the water table), no
+        removals, no Shepard or rebalancing, and the global damping of Eq. (43)-(44) at
+        eta_d = `initial.equilibrate_damping`; the clock stays at 0. Then velocities and
+        displacements are zeroed, so the run starts at rest from the relaxed stress.
+        Returns what it did, for summary.json."""
+        ini = self.scene.initial
+        if ini.equilibrate <= 0.0 or self.step > 0:
+            return {}
+        steps = int(math.ceil(ini.equilibrate / self.stepping.dt_main))
+        dt_scheme = (self.dt, self.scheme)
+        damping = self.damping
+        self.dt, self.scheme = self.stepping.dt_main, SCHEME_NONE
+        self.damping = self.soil.damping_coefficient(ini.equilibrate_damping, self.h)
+        stages = [s for s in self.stages if s.every == 1]
+        wall0 = time.perf_counter()
+        for _ in range(steps):
+            for stage in stages:
+                stage.run()
+        self.dt, self.scheme = dt_scheme
+        self.damping = damping
+        self.check_failure()
+        st = self.store
+        n = st.n_owned
+        speed = float(np.sqrt((st.v[:n] ** 2).sum(axis=1)).max()) if n else 0.0
+        speed = self.slabs.allreduce_max(speed)
+        st.v[:n] = 0.0
+        st.u[:n] = 0.0
+        st.acc[:n] = 0.0
+        self.equilibrium = {"seconds_simulated": steps * self.dt, "steps": steps,
+                "eta_d": ini.equilibrate_damping, "max_speed_at_end_m_s": speed,
+                "wall_s": time.perf_counter() - wall0}
+        return self.equilibrium
 
     def check_failure(self) -> None:
         """Collective: all ranks raise NumericalError if any rank saw a non-finite value."""

@@ -116,12 +116,14 @@ def test_falling_block_migrates_bitwise(tmp_path_factory):
 
 @pytest.mark.mpi(min_size=2)
 def test_shepard_and_eq47_column_one_vs_two_ranks_bitwise(tmp_path_factory):
-    """The Shepard pass re-sends the halo, so filtered pressures match across the cut."""
+    """The Shepard pass re-sends the halo, so filtered pressures and (with
+    `shepard_stress`) effective stresses match across the cut."""
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
     scene = load_scene("terzaghi", COLUMN + ["stabilisation.shepard_every=7",
+                                             "stabilisation.shepard_stress=true",
                                              "pressure.beta=0.04"])
     _one_vs_two(comm, scene, out)
 

@@ -2,8 +2,16 @@
 used for soils by Bui et al. 2008, the paper's refs. [11, 18]): the part of C_ij in
 Eq. (26) that adds f_ij^n (R_i + R_j) to the pair stress, with f_ij = W(r_ij) / W(dx).
 
-R_i is -epsilon times the tensile principal parts of particle i's total in-plane stress
-sigma' - p I (Eq. 2), rotated back to x, y: compression contributes nothing.
+R_i is -epsilon times the tensile principal parts of particle i's in-plane EFFECTIVE
+stress sigma', rotated back to x, y: compression contributes nothing.
+
+Why the effective stress and not the total sigma' - p I (Eq. 2): the tensile instability
+is a clumping of the skeleton's particles, and any clump changes div v, which the pore
+water of Eq. (25) resists with its stiffness K_l / n. Under suction the total stress is
+tensile while the skeleton is not; R from the total stress then pushed the particles of
+a sheared front or corner apart, they dilated and the suction grew (issue 13, cause 2:
+`python -m psph.verify.sliding`, the sliding block's corner reached -122 kPa with R from
+the total stress and -76 kPa with R from sigma' or with no artificial stress at all).
 """
 
 import math
@@ -12,11 +20,11 @@ import numba as nb
 
 
 @nb.njit(cache=True)
-def artificial_stress(n, stress, p, epsilon, out):
+def artificial_stress(n, stress, epsilon, out):
     """out[i] = (R_xx, R_yy, R_xy) for rows 0..n-1 (Pa)."""
     for i in range(n):
-        sxx = stress[i, 0] - p[i]
-        syy = stress[i, 1] - p[i]
+        sxx = stress[i, 0]
+        syy = stress[i, 1]
         sxy = stress[i, 3]
         c = 0.5 * (sxx + syy)
         d = 0.5 * (sxx - syy)

@@ -32,6 +32,12 @@ against its own ghosts by about 0.4 U/dx of spurious div v (tests/test_walls.py)
 Eq. (24)-(25) turn into run-away suction. A fixed wall resists shear, not stretching
 along itself; the paper's virtual wall particles [11] line the whole base and do not
 have this defect. On free-slip ghosts vs = v, so Gs = 0 without a fixed wall.
+The artificial viscosity (Monaghan, in C_ij of Eq. 26) also takes vs on ghost pairs: with
+-v, the ghosts ahead of a particle sliding at U approached it at 2U, those behind receded,
+and the one-sided term pushed the bottom row backward and upward. That drag (7x the
+soil's strength) and lift (suction under a nearly undrained soil) were numerical
+(issue 13, cause 1: `python -m psph.verify.sliding`). The wall's resistance to sliding
+is its shear stress, which the fixed-wall ghosts keep.
 """
 
 import math
@@ -123,9 +129,10 @@ def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, v
                             sxy += fn * (astress[a, 2] + astress[b, 2])
                         f0 = sxx * g0 + sxy * g1
                         f1 = sxy * g0 + syy * g1
-                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26)
+                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26), on the
+                        # free-slip relative velocity: see "Walls" in the module docstring
                         pi_ab = 0.0
-                        vdotr = dv0 * dx0 + dv1 * dx1
+                        vdotr = ds0 * dx0 + ds1 * dx1
                         if vdotr < 0.0:
                             mu = h * vdotr / (r2 + eps2)
                             pi_ab = (-av_alpha * c_sound * mu + av_beta * mu * mu) / (

@@ -58,3 +58,51 @@ def shepard_pressure(n_total, n_owned, x, p, p_prev, vol, drained_from, t, cell_
             filtered = num[i] / den[i]
             p_prev[i] += filtered - p[i]
             p[i] = filtered
+
+
+@nb.njit(cache=True)
+def shepard_stress(n_total, n_owned, x, stress, vol, cell_start, order, ncell, h, num, den):
+    """Filter the effective stress (xx, yy, zz, xy) of particles 0..n_owned-1 in place with
+    the same zeroth-order Shepard sum as Eq. (46): the stress regularisation the paper
+    points to for this noise (its ref. [14], there with MLS). The odd-even mode of sigma'
+    is invisible to the pair-symmetric divergence of Eq. (26), so nothing else damps it.
+    Wall ghosts carry the mirrored stress. num: scratch (>= n_owned, 4); den: >= n_owned."""
+    w0 = w_cubic(0.0, h)
+    for i in range(n_owned):
+        den[i] = vol[i] * w0
+        for c in range(4):
+            num[i, c] = vol[i] * w0 * stress[i, c]
+    ncx = ncell[0]
+    ncy = ncell[1]
+    support2 = 4.0 * h * h
+    for cy in range(ncy):
+        for cx in range(ncx):
+            c0 = cy * ncx + cx
+            for sa in range(cell_start[c0], cell_start[c0 + 1]):
+                a = order[sa]
+                for k in range(5):
+                    nc, s0 = half_stencil(k, c0, sa, cx, cy, ncx, ncy, cell_start)
+                    if nc < 0:
+                        continue
+                    for sb in range(s0, cell_start[nc + 1]):
+                        b = order[sb]
+                        if a >= n_owned and b >= n_owned:
+                            continue
+                        d0 = x[b, 0] - x[a, 0]
+                        d1 = x[b, 1] - x[a, 1]
+                        r2 = d0 * d0 + d1 * d1
+                        if r2 >= support2:
+                            continue
+                        w = w_cubic(math.sqrt(r2), h)
+                        if a < n_owned:
+                            den[a] += vol[b] * w
+                            for c in range(4):
+                                num[a, c] += vol[b] * w * stress[b, c]
+                        if b < n_owned:
+                            den[b] += vol[a] * w
+                            for c in range(4):
+                                num[b, c] += vol[a] * w * stress[a, c]
+    for i in range(n_owned):
+        if den[i] > 0.0:
+            for c in range(4):
+                stress[i, c] = num[i, c] / den[i]

@@ -106,12 +106,15 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         l11 = (s[6] + s[27]) * m01 + gs11 * m11
         div_v = l00 + l11
         if not correct_strain:
-            # strain rate and spin from the plain kernel gradient (Bui et al. 2008): the
-            # corrected one excites a growing zig-zag mode at free surfaces (README)
-            l00 = gs00
+            # shear rate and spin from the plain kernel gradient (Bui et al. 2008): the
+            # corrected one excites a growing zig-zag mode at free surfaces (README). The
+            # normal rates keep the correction, so that the skeleton changes volume as the
+            # pore water of Eq. (24)-(25) sees it: where the support is cut (free
+            # surfaces, corners) the plain div v is about half the corrected one, the two
+            # phases disagreed on how much the soil expanded, and suction grew at sheared
+            # corners (issue 13; README)
             l01 = s[5]
             l10 = s[6]
-            l11 = gs11
 
         # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
         e01 = 0.5 * (l01 + l10)

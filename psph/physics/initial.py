@@ -88,7 +88,9 @@ def geostatic(scene, data: dict[str, np.ndarray]) -> None:
     g = -scene.gravity[1]
     x = data["x"]
     dx = scene.particles.dx
-    column = np.round(x[:, 0] / dx).astype(np.int64)
+    # lattice columns: x = x_min + k dx (rounding x / dx itself would merge neighbouring
+    # columns, whose centres sit at half-integers, and shift p by rho_l g dx)
+    column = np.round((x[:, 0] - x[:, 0].min()) / dx).astype(np.int64)
     top = np.full(column.max() - column.min() + 1, -np.inf)
     np.maximum.at(top, column - column.min(), x[:, 1])
     depth = top[column - column.min()] + 0.5 * dx - x[:, 1]

@@ -1,0 +1,290 @@
+"""Pressure quality of a saturated collapse or slope run (Sections 4.4-4.5), from its
+snapshots, on rank 0 in post-processing (numpy only).
+
+- excess pore pressure: p minus the hydrostatic pressure of the water table at each
+  particle's current position (what the paper's Figs. 14-17, 20 and 24 show);
+- its percentiles and extremes at each snapshot;
+- a checkerboard index of p and of the mean effective stress p' = -(s'xx + s'yy + s'zz)/3:
+  the particle-scale, odd-even noise the README reports in the debris (cf. the pressure
+  noise of the unstabilised run, Fig. 22, and the Shepard filter Eq. (46)).
+
+`python -m psph.verify.pressure OUT [OUT ...] [--write]` prints one line per run and with
+`--write` stores the block as `metrics.pressure_quality` in each OUT/summary.json.
+"""
+
+import argparse
+import json
+import math
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+ALPHA_2D = 15.0 / (7.0 * math.pi)  # normalisation of Eq. (21) in 2D, times 1/h^2
+DEBRIS_DX = 5.0  # a particle that moved more than this many dx is "debris"
+PERCENTILES = (1, 5, 50, 95, 99)
+SURFACE_BIN = 0.25  # bin width of the ground-surface search, in dx
+SURFACE_REACH = 3  # bins either side of a particle's own bin (a window about 2 dx wide)
+
+
+def ground_surface(x: np.ndarray, dx: float) -> np.ndarray:
+    """Elevation (m) of the highest particle centre above each particle.
+
+    The search window is the particle's own bin of width dx/4 and 3 bins on either side,
+    i.e. a column about 2 dx wide centred on the particle (1.5-2 dx; the bins are anchored
+    half a spacing left of the leftmost particle, so on the initial lattice a particle's
+    window holds its own lattice column only, as in psph/physics/initial.py). A particle
+    splashed above the mass lifts the surface of the particles below it.
+    """
+    x = np.asarray(x, dtype=float)
+    if len(x) == 0:
+        return np.zeros(0)
+    b = SURFACE_BIN * dx
+    k = np.floor((x[:, 0] - (x[:, 0].min() - 0.5 * dx)) / b).astype(np.int64)
+    m = SURFACE_REACH
+    top = np.full(k.max() + 1 + 2 * m, -np.inf)
+    np.maximum.at(top, k + m, x[:, 1])
+    windowed = top.copy()
+    for s in range(1, m + 1):  # sliding maximum over 2m + 1 bins
+        windowed[m:-m] = np.maximum(windowed[m:-m], np.maximum(top[m - s:len(top) - m - s],
+                                                               top[m + s:len(top) - m + s]))
+    return windowed[k + m]
+
+
+def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | None = None
+                         ) -> np.ndarray:
+    """Hydrostatic pore pressure (Pa) of the water table at each particle's current
+    position x (N, 2): gamma_l max(0, y_w - y), gamma_l = rho_l |g| (the initial state,
+    `initial.water_table`, Sections 4.4-4.5).
+
+    y_w, from `scene.initial.water_table`:
+
+    - "surface": the ground surface above the particle, taken as the centre of the highest
+      particle in a column about 2 dx wide around it (`ground_surface`). The soil of this
+      model is fully saturated (no unsaturated zone, no free water), so its water table is
+      its current surface. The centre, not the top (y + dx/2), is the convention of the
+      initial state (psph/physics/initial.py: p = 0 at the top particle's centre), so a
+      column at rest has zero excess pressure.
+    - a number (an elevation): that level, but never above the current ground surface of
+      the particle's column: water does not stand above the soil in this model (ponding
+      keeps p <= 0 on the free surface), so where the mass has spread below the level
+      (the debris of the Section 4.4 collapse) the table follows the surface. Before the
+      mass moves this is the level itself.
+    - None: zero.
+
+    `surface_y`: the ground-surface elevation per particle (N,) or one value, if known;
+    by default `ground_surface(x, dx)`.
+    """
+    x = np.asarray(x, dtype=float)
+    table = scene.initial.water_table
+    if table is None or len(x) == 0:
+        return np.zeros(len(x))
+    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    surface = ground_surface(x, scene.particles.dx) if surface_y is None \
+        else np.broadcast_to(np.asarray(surface_y, dtype=float), (len(x),))
+    y_w = surface if table == "surface" else np.minimum(float(table), surface)
+    return gamma * np.maximum(y_w - x[:, 1], 0.0)
+
+
+def excess_pressure(snap: dict, scene) -> np.ndarray:
+    """Excess pore pressure p - `hydrostatic_pressure` (Pa) of one snapshot (a dict of
+    `psph.io.snapshots.read_snapshots`: x, u, p, stress, id, ...)."""
+    return snap["p"] - hydrostatic_pressure(snap["x"], scene)
+
+
+def mean_effective_stress(stress: np.ndarray) -> np.ndarray:
+    """p' = -(s'xx + s'yy + s'zz) / 3 (Pa, compression positive) from the effective stress
+    columns xx, yy, zz, xy, ... (tension positive, Eq. (2))."""
+    return -(stress[:, 0] + stress[:, 1] + stress[:, 2]) / 3.0
+
+
+def cubic_spline(r: np.ndarray, h: float) -> np.ndarray:
+    """Kernel W(r, h) of Eq. (21) in 2D (inner branch q^3/2, as psph/kernels/spline.py)."""
+    q = np.asarray(r, dtype=float) / h
+    t = np.clip(2.0 - q, 0.0, None)
+    w = np.where(q < 1.0, 2.0 / 3.0 - q * q + 0.5 * q ** 3, t ** 3 / 6.0)
+    return ALPHA_2D / (h * h) * w
+
+
+def neighbour_pairs(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All ordered pairs (i, j), i != j, closer than `radius`, with their distance: a
+    cell list of square cells of side `radius` (vectorised; no pair loop)."""
+    x = np.asarray(x, dtype=float)
+    ok = np.all(np.isfinite(x), axis=1)
+    idx = np.flatnonzero(ok)
+    if len(idx) < 2:
+        empty = np.zeros(0, np.int64)
+        return empty, empty, np.zeros(0)
+    c = np.floor((x[idx] - x[idx].min(axis=0)) / radius).astype(np.int64)
+    width = int(c[:, 0].max()) + 3  # columns shifted by 1: the -1 and +1 offsets never wrap
+    cid = c[:, 1] * width + c[:, 0] + 1
+    order = np.argsort(cid, kind="stable")
+    sorted_cid = cid[order]
+    ii, jj = [], []
+    for oy in (-1, 0, 1):
+        for ox in (-1, 0, 1):
+            nb = (c[:, 1] + oy) * width + c[:, 0] + 1 + ox
+            start = np.searchsorted(sorted_cid, nb, side="left")
+            count = np.searchsorted(sorted_cid, nb, side="right") - start
+            total = int(count.sum())
+            if total == 0:
+                continue
+            first = np.cumsum(count) - count
+            a = np.repeat(np.arange(len(idx)), count)
+            b = order[np.repeat(start, count) + np.arange(total) - np.repeat(first, count)]
+            ii.append(a)
+            jj.append(b)
+    i = np.concatenate(ii)
+    j = np.concatenate(jj)
+    r = np.linalg.norm(x[idx[i]] - x[idx[j]], axis=1)
+    keep = (i != j) & (r < radius)
+    return idx[i[keep]], idx[j[keep]], r[keep]
+
+
+def checkerboard_index(x: np.ndarray, f: np.ndarray, h: float, mask: np.ndarray | None = None,
+                       pairs: tuple | None = None) -> float:
+    """Particle-scale (odd-even) noise of a field f at positions x (N, 2).
+
+    index = rms_i (f_i - fbar_i) / rms_i (f_i - mean f), over the particles i of `mask`
+    (all by default), where fbar_i = sum_j W_ij f_j / sum_j W_ij is the Shepard average
+    (Eq. (46) with equal volumes) over the OTHER particles j != i within 2h, W the cubic
+    spline of Eq. (21) (h = scene.h = 1.2 dx by default). Every particle is a neighbour,
+    masked or not; a particle without neighbours is left out.
+
+    A smooth (linear) field gives ~0 away from the edges; an odd-even checkerboard on a
+    square lattice gives 1.45 (fbar_i = -0.45 f_i at h = 1.2 dx). By convention 0 when
+    f is constant over the mask (rms = 0). `pairs`: `neighbour_pairs(x, 2h)`, if known.
+    Returns NaN when the mask selects no particle with neighbours.
+    """
+    f = np.asarray(f, dtype=float)
+    n = len(f)
+    sel = np.ones(n, bool) if mask is None else np.asarray(mask, bool)
+    i, j, r = neighbour_pairs(x, 2.0 * h) if pairs is None else pairs
+    w = cubic_spline(r, h)
+    den = np.bincount(i, weights=w, minlength=n)
+    num = np.bincount(i, weights=w * f[j], minlength=n)
+    use = sel & (den > 0) & np.isfinite(f)
+    if not use.any():
+        return math.nan
+    fbar = num[use] / den[use]
+    spread = math.sqrt(float(np.mean((f[use] - f[use].mean()) ** 2)))
+    if spread == 0.0 or spread < 1e-12 * float(np.max(np.abs(f[use]))):
+        return 0.0
+    return math.sqrt(float(np.mean((f[use] - fbar) ** 2))) / spread
+
+
+def _num(v: float) -> float | None:
+    """JSON-safe float: NaN becomes None."""
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def snapshot_quality(snap: dict, scene) -> dict:
+    """Pressure quality of one snapshot: percentiles and extremes of the excess pressure
+    (with the particle's id and position), and the checkerboard index of p and p' over all
+    particles and over the debris (moved more than 5 dx from x - u, the initial place)."""
+    x = snap["x"]
+    ids = snap["id"] if "id" in snap else np.arange(len(x))
+    ex = excess_pressure(snap, scene)
+    pct = np.percentile(ex, PERCENTILES)
+    lo, hi = int(np.argmin(ex)), int(np.argmax(ex))
+    debris = np.linalg.norm(snap["u"], axis=1) > DEBRIS_DX * scene.particles.dx
+    pairs = neighbour_pairs(x, 2.0 * scene.h)
+    p_eff = mean_effective_stress(snap["stress"])
+    out = {"time_s": float(snap["time"])}
+    for q, v in zip(PERCENTILES, pct, strict=True):
+        out[f"excess_p{q}_Pa"] = float(v)
+    out["abs_excess_p99_Pa"] = float(np.percentile(np.abs(ex), 99))
+    out.update({"excess_min_Pa": float(ex[lo]), "excess_min_id": int(ids[lo]),
+                "excess_min_x_m": [float(v) for v in x[lo]],
+                "excess_max_Pa": float(ex[hi]), "excess_max_id": int(ids[hi]),
+                "excess_max_x_m": [float(v) for v in x[hi]],
+                "debris_particles": int(debris.sum())})
+    for name, f in (("p", snap["p"]), ("p_eff", p_eff)):
+        out[f"checkerboard_{name}_all"] = _num(checkerboard_index(x, f, scene.h, None, pairs))
+        out[f"checkerboard_{name}_debris"] = _num(
+            checkerboard_index(x, f, scene.h, debris, pairs)) if debris.any() else None
+    return out
+
+
+def pressure_quality(snaps: list[dict], scene) -> dict:
+    """The `metrics.pressure_quality` block of summary.json for a run's snapshots
+    (`read_snapshots`): `series` holds each quantity of `snapshot_quality` as a list over
+    the snapshot times, `over_run` the extremes over all snapshots and the last snapshot's
+    checkerboard indices. JSON-serialisable (floats, ints, lists; None for undefined)."""
+    rows = [snapshot_quality(s, scene) for s in snaps]
+    series = {k: [r[k] for r in rows] for k in rows[0]} if rows else {}
+    over = {}
+    if rows:
+        kmin = int(np.argmin(series["excess_min_Pa"]))
+        kmax = int(np.argmax(series["excess_max_Pa"]))
+        over = {"excess_min_Pa": series["excess_min_Pa"][kmin],
+                "excess_min_id": series["excess_min_id"][kmin],
+                "excess_min_time_s": series["time_s"][kmin],
+                "excess_min_x_m": series["excess_min_x_m"][kmin],
+                "excess_max_Pa": series["excess_max_Pa"][kmax],
+                "excess_max_id": series["excess_max_id"][kmax],
+                "excess_max_time_s": series["time_s"][kmax],
+                "excess_max_x_m": series["excess_max_x_m"][kmax],
+                "excess_p1_min_Pa": min(series["excess_p1_Pa"]),
+                "excess_p99_max_Pa": max(series["excess_p99_Pa"]),
+                "abs_excess_p99_max_Pa": max(series["abs_excess_p99_Pa"])}
+        for k in ("checkerboard_p_all", "checkerboard_p_debris", "checkerboard_p_eff_all",
+                  "checkerboard_p_eff_debris"):
+            vals = [v for v in series[k] if v is not None]
+            over[f"{k}_max"] = max(vals) if vals else None
+            over[f"{k}_last"] = series[k][-1]
+    table = scene.initial.water_table
+    return {"water_table": table if table is None or isinstance(table, str) else float(table),
+            "debris_moved_more_than_m": DEBRIS_DX * scene.particles.dx,
+            "h_m": scene.h, "over_run": over, "series": series}
+
+
+def _fmt(v, scale: float = 1.0, spec: str = ".1f") -> str:
+    return "-" if v is None else format(v / scale, spec)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m psph.verify.pressure OUT [OUT ...] [--write]`: one line per run."""
+    from psph.errors import SceneError
+    from psph.io.snapshots import read_snapshots
+    from psph.scene import validate
+
+    ap = argparse.ArgumentParser(prog="python -m psph.verify.pressure",
+                                 description="pressure quality of psph runs (excess pore "
+                                 "pressure, checkerboard index of p and p')")
+    ap.add_argument("out", nargs="+", type=Path, help="run output directories")
+    ap.add_argument("--write", action="store_true",
+                    help="add/replace metrics.pressure_quality in OUT/summary.json")
+    args = ap.parse_args(argv)
+    print(f"{'run':<32} {'t_end':>6} {'min_ex':>9} {'max_ex':>9} {'p1_ex':>9} {'p99_ex':>9}"
+          f" {'cb_p_deb':>8} {'cb_pe_deb':>9}   (excess p in kPa: min, max, lowest p1 and "
+          "highest p99 over the snapshots; checkerboard of p and p' in the debris at the last "
+          "snapshot)")
+    status = 0
+    for out in args.out:
+        try:
+            scene = validate(tomllib.loads((out / "scene.toml").read_text()),
+                             str(out / "scene.toml"))
+            snaps = read_snapshots(out / "particles.h5")
+        except (OSError, SceneError) as e:
+            print(f"{str(out):<32} error: {e}", file=sys.stderr)
+            status = 2
+            continue
+        q = pressure_quality(snaps, scene)
+        o = q["over_run"]
+        print(f"{out.name or str(out):<32} {q['series']['time_s'][-1]:>6.3g} "
+              f"{_fmt(o['excess_min_Pa'], 1e3):>9} {_fmt(o['excess_max_Pa'], 1e3):>9} "
+              f"{_fmt(o['excess_p1_min_Pa'], 1e3):>9} {_fmt(o['excess_p99_max_Pa'], 1e3):>9} "
+              f"{_fmt(o['checkerboard_p_debris_last'], 1, '.3f'):>8} "
+              f"{_fmt(o['checkerboard_p_eff_debris_last'], 1, '.3f'):>9}")
+        if args.write:
+            path = out / "summary.json"
+            summary = json.loads(path.read_text()) if path.is_file() else {}
+            summary.setdefault("metrics", {})["pressure_quality"] = q
+            path.write_text(json.dumps(summary, indent=2) + "\n")
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,156 @@
+"""Pressure quality (psph/verify/pressure.py): the hydrostatic pressure of the water table
+at the current position, the checkerboard index, and the summary block (serial, fast)."""
+
+import json
+import math
+
+import h5py
+import numpy as np
+import pytest
+
+from psph.physics.initial import initial_particles
+from psph.scene import load_scene, to_toml
+from psph.verify.pressure import (
+    checkerboard_index,
+    excess_pressure,
+    hydrostatic_pressure,
+    main,
+    mean_effective_stress,
+    neighbour_pairs,
+    pressure_quality,
+)
+
+DX = 0.1
+H = 1.2 * DX
+N = 30
+
+
+def _lattice(n: int = N, dx: float = DX) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    g = (np.arange(n) + 0.5) * dx
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    x = np.c_[g[i.ravel()], g[j.ravel()]]
+    return x, i.ravel(), j.ravel()
+
+
+def _scene(water_table, dx: float = DX):
+    """The geostatic column with spacing dx and the given `initial.water_table`."""
+    scene = load_scene("geostatic_column", [f"particles.dx={dx}"])
+    scene.initial.water_table = water_table
+    return scene
+
+
+def test_neighbour_pairs_match_brute_force():
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0.0, 1.5, (400, 2))
+    i, j, r = neighbour_pairs(x, 0.2)
+    d = np.linalg.norm(x[:, None] - x[None], axis=2)
+    bi, bj = np.nonzero((d < 0.2) & ~np.eye(len(x), dtype=bool))
+    assert set(zip(i.tolist(), j.tolist(), strict=True)) == \
+        set(zip(bi.tolist(), bj.tolist(), strict=True))
+    assert np.allclose(r, d[i, j])
+
+
+def test_checkerboard_index_linear_checkerboard_constant():
+    x, i, j = _lattice()
+    interior = np.all((x > 3 * H) & (x < N * DX - 3 * H), axis=1)
+    linear = 4.0e3 + 2.0e3 * x[:, 0] - 9.81e3 * x[:, 1]
+    assert checkerboard_index(x, linear, H, interior) < 0.05
+    assert checkerboard_index(x, linear, H) < 0.05  # edges included: still small
+    odd_even = (-1.0) ** (i + j)
+    assert checkerboard_index(x, odd_even, H) > 1.0
+    assert checkerboard_index(x, odd_even, H, interior) == pytest.approx(1.4547, abs=2e-3)
+    # noise on top of a smooth field is seen in proportion to its share of the spread
+    assert checkerboard_index(x, linear + 0.1 * linear.std() * odd_even, H) > 0.1
+    assert checkerboard_index(x, np.full(len(x), 7.3), H) == 0.0
+    assert checkerboard_index(x, np.zeros(len(x)), H) == 0.0
+
+
+def test_hydrostatic_pressure_level_and_surface():
+    x, _, _ = _lattice(10)  # 1 x 1 m block of particles, tops at y = 0.95 (centres)
+    gamma = 1000.0 * 9.81
+    level = hydrostatic_pressure(x, _scene(0.55))
+    assert np.allclose(level, gamma * np.maximum(0.55 - x[:, 1], 0.0))
+    surface = hydrostatic_pressure(x, _scene("surface"))
+    assert np.allclose(surface, gamma * (0.95 - x[:, 1]))  # 0 at the top particle's centre
+    # the surface is the current one: lower the right half by 0.3 m
+    moved = x.copy()
+    right = moved[:, 0] > 0.5
+    moved[right, 1] -= 0.3
+    p = hydrostatic_pressure(moved, _scene("surface"))
+    assert np.allclose(p[right], gamma * (0.65 - moved[right, 1]))
+    assert np.allclose(p[~right], gamma * (0.95 - moved[~right, 1]))
+    # a level above the lowered surface follows the surface there (no water above soil)
+    p = hydrostatic_pressure(moved, _scene(0.8))
+    assert np.allclose(p[right], gamma * (0.65 - moved[right, 1]))
+    assert np.allclose(p[~right], gamma * np.maximum(0.8 - moved[~right, 1], 0.0))
+    assert np.all(hydrostatic_pressure(x, _scene(None)) == 0.0)
+    assert np.allclose(hydrostatic_pressure(x, _scene("surface"), surface_y=2.0),
+                       gamma * (2.0 - x[:, 1]))
+
+
+def test_initial_state_has_no_excess():
+    scene = load_scene("collapse_saturated_psi0", [])
+    data = initial_particles(scene)
+    snap = {"x": data["x"], "p": data["p"]}
+    assert np.abs(excess_pressure(snap, scene)).max() < 1e-6
+
+
+def _fake_snapshots():
+    scene = _scene("surface")
+    x, i, j = _lattice(12)
+    snaps = []
+    for k, t in enumerate((0.0, 0.5, 1.0)):
+        u = np.zeros_like(x)
+        u[x[:, 0] > 0.8, 0] = 0.8 * k  # the right part slides off: debris at t > 0
+        xt = x + u
+        p = hydrostatic_pressure(xt, scene) + 1e3 * k * (-1.0) ** (i + j)
+        stress = np.zeros((len(x), 6))
+        stress[:, :3] = -2e4 * (1.2 - x[:, 1:2])
+        snaps.append({"id": np.arange(len(x)) + 100, "x": xt, "u": u, "p": p,
+                      "stress": stress, "time": t, "step": k})
+    return scene, snaps
+
+
+def test_pressure_quality_is_finite_and_serialisable():
+    scene, snaps = _fake_snapshots()
+    q = pressure_quality(snaps, scene)
+    text = json.dumps(q, allow_nan=False)  # plain JSON: no NaN, no numpy types
+    assert json.loads(text) == q
+    s, o = q["series"], q["over_run"]
+    assert s["time_s"] == [0.0, 0.5, 1.0]
+    assert s["debris_particles"][0] == 0 and s["debris_particles"][-1] > 0
+    assert s["checkerboard_p_debris"][0] is None and s["checkerboard_p_debris"][-1] > 0.5
+    assert s["checkerboard_p_eff_all"][-1] < 0.1  # p' is linear in y (edges: not 0)
+    assert s["excess_p50_Pa"][0] == 0.0
+    assert o["excess_min_Pa"] == pytest.approx(-2e3) and o["excess_max_Pa"] == pytest.approx(2e3)
+    assert o["excess_max_id"] >= 100 and len(o["excess_max_x_m"]) == 2
+    for v in (o["excess_p1_min_Pa"], o["abs_excess_p99_max_Pa"], o["checkerboard_p_all_max"]):
+        assert math.isfinite(v)
+    assert mean_effective_stress(snaps[0]["stress"])[0] == pytest.approx(2e4 * (1.2 - 0.05))
+
+
+def test_cli_writes_summary(tmp_path, capsys):
+    """`python -m psph.verify.pressure OUT --write` on a hand-made output directory adds
+    metrics.pressure_quality and keeps the rest of summary.json; a missing one: exit 2."""
+    scene, snaps = _fake_snapshots()
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "scene.toml").write_text(to_toml(scene))
+    (out / "summary.json").write_text(json.dumps({"scene": scene.name,
+                                                  "metrics": {"collapse": {"runout_m": 1.0}}}))
+    with h5py.File(out / "particles.h5", "w") as f:
+        for s in snaps:
+            g = f.create_group(f"snapshots/{s['step']:08d}")
+            g.attrs["time"], g.attrs["step"] = s["time"], s["step"]
+            for k in ("id", "x", "u", "p", "stress"):
+                g[k] = s[k]
+            g["eps_p"] = np.zeros(len(s["x"]))
+    assert main([str(out), "--write"]) == 0
+    line = capsys.readouterr().out.splitlines()[1]
+    assert line.split()[0] == "run" and line.split()[3] == "2.0"  # max excess, kPa
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["metrics"]["collapse"] == {"runout_m": 1.0}
+    assert summary["metrics"]["pressure_quality"]["over_run"]["excess_max_Pa"] == \
+        pytest.approx(2e3)
+    assert main([str(tmp_path / "missing")]) == 2
+    assert "error" in capsys.readouterr().err
