@@ -30,9 +30,10 @@ By default `advance` takes the shear rate and spin of the stress rate from the p
 (uncorrected) kernel gradient L M (`correct_strain=False`, README "Surface mode") and the
 normal rates from the corrected gradient. On the lattice the moment matrix M of Eq. (22)
 is 0.9908 I instead of I (h = 1.2 dx), so in simple shear the shear stress rate is 0.9 %
-slow and the SPH p ends up to about 1 % of its peak below the reference. `reference_element(..., moment=moment_history(sph))`
-takes the M(t) measured at the centre and then reproduces SPH to 1e-6: that is the whole
-difference. With `correct_strain=True` SPH is the reference to the servo tolerance.
+slow and the SPH p ends up to about 1 % of its peak below the reference.
+`reference_element(..., moment=moment_history(sph))` takes the M(t) measured at the
+centre and then reproduces SPH to 1e-6: that is the whole difference. With
+`correct_strain=True` SPH is the reference to the servo tolerance.
 
     python -m psph.verify.element [--drained]   # the six cases, reference vs SPH
 """
