@@ -256,17 +256,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("out", nargs="+", type=Path, help="run output directories")
     ap.add_argument("--write", action="store_true",
                     help="add/replace metrics.pressure_quality in OUT/summary.json")
+    ap.add_argument("--at", type=float, default=None,
+                    help="use the snapshots up to this time (s) only (compare runs of "
+                    "different lengths at one time)")
     args = ap.parse_args(argv)
     print(f"{'run':<32} {'t_end':>6} {'min_ex':>9} {'max_ex':>9} {'p1_ex':>9} {'p99_ex':>9}"
-          f" {'cb_p_deb':>8} {'cb_pe_deb':>9}   (excess p in kPa: min, max, lowest p1 and "
-          "highest p99 over the snapshots; checkerboard of p and p' in the debris at the last "
-          "snapshot)")
+          f" {'abs_p99':>9} {'cb_p_deb':>8} {'cb_pe_deb':>9}   (excess p in kPa: min, max, "
+          "lowest p1, highest p99 and highest 99th percentile of |excess| over the snapshots; "
+          "checkerboard of p and p' in the debris at the last snapshot)")
     status = 0
     for out in args.out:
         try:
             scene = validate(tomllib.loads((out / "scene.toml").read_text()),
                              str(out / "scene.toml"))
             snaps = read_snapshots(out / "particles.h5")
+            if args.at is not None:
+                snaps = [sn for sn in snaps if sn["time"] <= args.at * (1 + 1e-9)]
         except (OSError, SceneError) as e:
             print(f"{str(out):<32} error: {e}", file=sys.stderr)
             status = 2
@@ -276,9 +281,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{out.name or str(out):<32} {q['series']['time_s'][-1]:>6.3g} "
               f"{_fmt(o['excess_min_Pa'], 1e3):>9} {_fmt(o['excess_max_Pa'], 1e3):>9} "
               f"{_fmt(o['excess_p1_min_Pa'], 1e3):>9} {_fmt(o['excess_p99_max_Pa'], 1e3):>9} "
+              f"{_fmt(o['abs_excess_p99_max_Pa'], 1e3):>9} "
               f"{_fmt(o['checkerboard_p_debris_last'], 1, '.3f'):>8} "
               f"{_fmt(o['checkerboard_p_eff_debris_last'], 1, '.3f'):>9}")
-        if args.write:
+        if args.write and args.at is None:
             path = out / "summary.json"
             summary = json.loads(path.read_text()) if path.is_file() else {}
             summary.setdefault("metrics", {})["pressure_quality"] = q

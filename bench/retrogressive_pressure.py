@@ -1,0 +1,128 @@
+"""Pore pressure through the retrogressive failure (Section 4.5, Fig. 20 and 24) from
+finished runs: the checks of issue 13.
+
+    .venv/bin/python bench/retrogressive_pressure.py bench/out/field_retrogressive_k0_0.5 \
+        bench/out/field_retrogressive_k0_1.5
+
+For each run directory:
+
+- the median excess p (psph/verify/pressure.py) in the basal shear zone of the first
+  slide: particles with eps_p > 0.05 that started in the bottom 4 m and in front of the
+  first slide's back scarp, at the snapshot that first shows the slide;
+- the most negative and the largest p over all snapshots (with time and position),
+  against -0.5 MPa and the slope's initial total vertical stress at its base,
+  rho_sat g H (pore pressure above it would be a negative effective vertical stress);
+- the excess p of the debris (moved more than 5 dx) after each slide: its median and 95th
+  percentile at the slide and just before the next one (or at the end): Fig. 20 shows it
+  dissipating.
+
+Prints a table and writes bench/out/retrogressive_pressure.json.
+"""
+
+import json
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).parent.parent
+sys.path.insert(0, str(ROOT))
+
+from psph.io.snapshots import read_snapshots  # noqa: E402
+from psph.scene import validate  # noqa: E402
+from psph.verify.collapse import slide_history  # noqa: E402
+from psph.verify.pressure import DEBRIS_DX, excess_pressure  # noqa: E402
+
+BAND_EPS = 0.05  # equivalent plastic strain of the shear zone
+BASE_ZONE_M = 4.0  # the basal shear zone starts in the bottom 4 m
+
+
+def run_checks(out: Path) -> dict:
+    scene = validate(tomllib.loads((out / "scene.toml").read_text()), str(out / "scene.toml"))
+    snaps = read_snapshots(out / "particles.h5")
+    dx = scene.particles.dx
+    slides = slide_history(snaps, dx)
+    times = np.array([s["time"] for s in snaps])
+    m = scene.material
+    rho_sat = (1 - m.porosity) * m.rho_s + m.porosity * m.rho_l
+    x0 = snaps[0]["x"] - snaps[0]["u"]
+    height = float(x0[:, 1].max() + 0.5 * dx)
+    sigma_v_base = rho_sat * abs(scene.gravity[1]) * height
+    result = {"run": str(out), "t_end_s": float(times[-1]), "slides": slides["slides"],
+              "slide_times_s": slides["slide_times_s"],
+              "sigma_v_base_Pa": sigma_v_base}
+    # basal shear zone of the first slide
+    if slides["slides"]:
+        t1 = slides["slide_times_s"][0]
+        scarp1 = slides["slide_scarps_m"][0]
+        s = snaps[int(np.argmin(np.abs(times - t1)))]
+        start = s["x"] - s["u"]
+        zone = (s["eps_p"] > BAND_EPS) & (start[:, 1] < BASE_ZONE_M) & (start[:, 0] > scarp1)
+        ex = excess_pressure(s, scene)
+        result["first_slide"] = {"time_s": float(s["time"]), "back_scarp_m": scarp1,
+                                 "zone_particles": int(zone.sum()),
+                                 "zone_excess_median_Pa": float(np.median(ex[zone]))
+                                 if zone.any() else None}
+    # extremes of p over the snapshots
+    lo = min(((float(s["p"].min()), s) for s in snaps), key=lambda a: a[0])
+    hi = max(((float(s["p"].max()), s) for s in snaps), key=lambda a: a[0])
+    result["p_min_Pa"] = lo[0]
+    result["p_min_at"] = {"time_s": float(lo[1]["time"]),
+                          "x_m": lo[1]["x"][int(np.argmin(lo[1]["p"]))].tolist()}
+    result["p_max_Pa"] = hi[0]
+    result["p_max_at"] = {"time_s": float(hi[1]["time"]),
+                          "x_m": hi[1]["x"][int(np.argmax(hi[1]["p"]))].tolist()}
+    result["p_above_sigma_v_base"] = int(sum((s["p"] > sigma_v_base).sum() for s in snaps))
+    # debris excess after each slide
+    marks = list(slides["slide_times_s"]) + [float(times[-1]) + 1.0]
+    decay = []
+    for k, t in enumerate(marks[:-1]):
+        t_next = min(marks[k + 1] - 1.0, float(times[-1]))
+        stats = []
+        for tt in (t, t_next):
+            s = snaps[int(np.argmin(np.abs(times - tt)))]
+            debris = np.linalg.norm(s["u"], axis=1) > DEBRIS_DX * dx
+            ex = excess_pressure(s, scene)[debris]
+            stats.append({"time_s": float(s["time"]), "particles": int(debris.sum()),
+                          "median_Pa": float(np.median(ex)) if len(ex) else None,
+                          "p95_Pa": float(np.percentile(ex, 95)) if len(ex) else None})
+        decay.append({"slide": k + 1, "at": stats[0], "later": stats[1]})
+    result["debris_after_slides"] = decay
+    return result
+
+
+def main(argv: list[str]) -> int:
+    rows = [run_checks(Path(a)) for a in argv]
+    for r in rows:
+        print(f"{r['run']}: t_end {r['t_end_s']:.1f} s, {r['slides']} slides at "
+              f"{', '.join(f'{t:.0f}' for t in r['slide_times_s'])} s")
+        fs = r.get("first_slide")
+        if fs:
+            med = fs["zone_excess_median_Pa"]
+            print(f"  basal shear zone of the first slide (t = {fs['time_s']:.1f} s, "
+                  f"{fs['zone_particles']} particles): median excess "
+                  f"{'-' if med is None else f'{med / 1e3:+.1f}'} kPa")
+        print(f"  p over all snapshots: min {r['p_min_Pa'] / 1e6:+.3f} MPa at "
+              f"t = {r['p_min_at']['time_s']:.1f} s (bar -0.5 MPa), max "
+              f"{r['p_max_Pa'] / 1e3:.0f} kPa at t = {r['p_max_at']['time_s']:.1f} s "
+              f"(bar: sigma_v at the base {r['sigma_v_base_Pa'] / 1e3:.0f} kPa; "
+              f"{r['p_above_sigma_v_base']} particle-snapshots above it)")
+        print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
+              f"{'later t':>7s} {'median':>8s} {'p95':>8s}  (excess p of the debris, kPa)")
+        for d in r["debris_after_slides"]:
+            a, b = d["at"], d["later"]
+
+            def f(v):
+                return "-" if v is None else f"{v / 1e3:8.1f}"
+            print(f"  {d['slide']:5d} {a['time_s']:6.1f} {a['particles']:6d} "
+                  f"{f(a['median_Pa']):>8s} {f(a['p95_Pa']):>8s}   {b['time_s']:7.1f} "
+                  f"{f(b['median_Pa']):>8s} {f(b['p95_Pa']):>8s}")
+    out = ROOT / "bench" / "out"
+    out.mkdir(exist_ok=True)
+    (out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
