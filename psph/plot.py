@@ -65,8 +65,12 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     wide = aspect < 0.25  # a slope: fields stacked in one column, frames one after another
     shape = (len(frames) * cols, 1) if wide else (len(frames), cols)
     width = 13.0 if wide else 5.5 * cols
+    # a run-out many times the slope's height: exaggerate the vertical scale so that each
+    # frame keeps a readable height (the title says by how much)
+    stretch = max(1.0, 0.06 / aspect) if wide else 1.0
     fig, axes = plt.subplots(*shape, squeeze=False,
-                             figsize=(width, 0.6 + shape[0] * width * aspect * 1.25))
+                             figsize=(width, 0.6 + shape[0] * (width * aspect * stretch * 1.25
+                                                               + (0.3 if stretch > 1 else 0))))
     for r, f in enumerate(frames):
         fields = [("eps_p", np.log10(f["eps_p"] + 1e-4), "log10 eps_p", (-4, 1), "viridis")]
         if coupled:
@@ -87,8 +91,9 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
                             vmax=vmax)
             ax.set_xlim(lo[0], hi[0])
             ax.set_ylim(lo[1], hi[1])
-            ax.set_aspect("equal")
-            ax.set_title(f"{label}, t = {f['time']:.3g} s", fontsize=9)
+            ax.set_aspect(stretch)
+            vex = f" (vertical scale x{stretch:.1f})" if stretch > 1 else ""
+            ax.set_title(f"{label}, t = {f['time']:.3g} s{vex}", fontsize=9)
             fig.colorbar(sc, ax=ax, shrink=0.8)
     summary = out / "summary.json"
     if summary.is_file():
