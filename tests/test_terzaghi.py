@@ -133,5 +133,5 @@ def test_explicit_and_tpi_agree_at_the_explicit_dt(tmp_path):
             top = snap["x"][:, 1] > snap["x"][:, 1].max() - 0.5 * 0.02
             assert -snap["u"][top, 1].mean() == pytest.approx(exact, rel=0.03)
     a, b = last["explicit"][-1], last["tpi"][-1]
-    assert a["time"] == pytest.approx(0.03)
+    assert abs(a["time"] - 0.03) < 1e-6  # the last snapshot, 0.03 s within one step
     assert np.max(np.abs(a["u"] - b["u"])) < 0.005 * np.max(np.abs(a["u"]))
