@@ -54,9 +54,12 @@ def main() -> None:
             "beta": beta, "exit_code": code, "dir": str(out),
             "t": [float(r["time"]) for r in rows], "p_min": [float(r["p_min"]) for r in rows]}
         case = report["cases"][label]
+        summary = out / "summary.json"  # written by a run that finished
+        if summary.is_file():
+            case["runout_m"] = json.loads(summary.read_text())["metrics"]["collapse"]["runout_m"]
         if case["t"]:
             print(f"{label}: exit {code}, most negative p {min(case['p_min']):.4g} Pa"
-                  f" by t = {case['t'][-1]:.3f} s")
+                  f" by t = {case['t'][-1]:.3f} s, run-out {case.get('runout_m', '-')} m")
         else:
             print(f"{label}: exit {code} before its first snapshot")
     (OUT / "collapse_beta.json").write_text(json.dumps(report, indent=1) + "\n")
@@ -72,11 +75,14 @@ def plot(report: dict) -> None:
     cases = report["cases"]
     fig = plt.figure(figsize=(13, 8))
     grid = fig.add_gridspec(len(TIMES) + 1, 2, height_ratios=[1] * len(TIMES) + [1.2])
-    lim = 100.0
     scene = load_scene("collapse_saturated_psi2.5")
+    frames = {label: read_snapshots(Path(case["dir"]) / "particles.h5")
+              for label, case in cases.items()}
+    # one colour scale for both columns: the largest |excess| shown, up to 10 kPa
+    lim = 10.0 * np.ceil(max(np.abs(excess_pressure(s, scene)).max() / 1e4
+                             for snaps in frames.values() for s in snaps) or 1.0)
     for c, (label, case) in enumerate(cases.items()):
-        snaps = {round(s["time"], 3): s for s in read_snapshots(Path(case["dir"]) /
-                                                                 "particles.h5")}
+        snaps = {round(s["time"], 3): s for s in frames[label]}
         for r, t in enumerate(TIMES):
             ax = fig.add_subplot(grid[r, c])
             s = min(snaps.values(), key=lambda s: abs(s["time"] - t))
@@ -93,11 +99,12 @@ def plot(report: dict) -> None:
             ax.set_aspect("equal")
             ax.set_title(f"{label}: t = {s['time']:.3g} s (excess p {ex.min():.0f} to "
                          f"{ex.max():.0f} kPa)", fontsize=9)
-            fig.colorbar(sc, ax=ax, label="excess p (kPa), clipped", shrink=0.8)
+            fig.colorbar(sc, ax=ax, label="excess p (kPa)", shrink=0.8)
     ax = fig.add_subplot(grid[-1, :])
     for label, case in cases.items():
         ax.plot(case["t"], np.array(case["p_min"]) / 1e3, label=label)
-    ax.set_yscale("symlog", linthresh=100)
+    if min(min(c["p_min"], default=0.0) for c in cases.values()) < -1e6:
+        ax.set_yscale("symlog", linthresh=100)  # a run-away reaches MPa
     ax.set_xlabel("t (s)")
     ax.set_ylabel("most negative p (kPa)")
     ax.legend()
