@@ -153,6 +153,9 @@ class Stabilisation(_Model):
     # with the Shepard step, also filter the effective stress (stress regularisation, the
     # paper's ref. [14]): the odd-even mode of sigma' has no other damping (issue 13)
     shepard_stress: bool = False
+    # the stress filter's kernel: "shepard" (zeroth order, Eq. 46's sum) or "mls" (first
+    # order, ref. [14]: linear stress fields kept, also at free surfaces)
+    stress_filter: Literal["shepard", "mls"] = "shepard"
     # artificial stress in C_ij of Eq. (26) (refs. [11, 18]): epsilon and exponent n;
     # default epsilon: 0.5 for Drucker-Prager soil, 0 (off) for elastic
     artificial_stress: Annotated[float, Field(ge=0.0)] | None = None

@@ -18,7 +18,7 @@ from psph.kernels.artificial_stress import artificial_stress
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import NSUMS, pair_sums, velocity_gradient_sums
 from psph.kernels.neighbours import bin_particles, grid_bounds
-from psph.kernels.shepard import shepard_pressure, shepard_stress
+from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.spline import w_cubic
 from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance, kick
 from psph.particles import ParticleStore
@@ -180,7 +180,10 @@ class Simulation:
         stages.append(Stage("neighbours", self._neighbours))
         m = self.scene.stabilisation.shepard_every
         if self.coupled and m > 0:
-            name = "shepard+stress" if self.scene.stabilisation.shepard_stress else "shepard"
+            stab = self.scene.stabilisation
+            name = "shepard"
+            if stab.shepard_stress:
+                name += "+stress" if stab.stress_filter == "shepard" else "+mls_stress"
             stages.append(Stage(f"{name}[every {m}]", self._shepard, every=m))
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
@@ -252,11 +255,17 @@ class Simulation:
                          st.drained_from, self.t, self.cell_start, self.order, self.ncell,
                          self.h, self.scratch[0], self.scratch[1])
         if self.scene.stabilisation.shepard_stress:
-            if self.scratch_stress.shape[0] < st.cap:
-                self.scratch_stress = np.zeros((st.cap, 4))
-            shepard_stress(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
-                           self.order, self.ncell, self.h, self.scratch_stress,
-                           self.scratch[0])
+            if self.scene.stabilisation.stress_filter == "mls":
+                if self.scratch_stress.shape[0] < st.cap or self.scratch_stress.shape[1] < 18:
+                    self.scratch_stress = np.zeros((st.cap, 18))
+                mls_stress(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
+                           self.order, self.ncell, self.h, self.scratch_stress)
+            else:
+                if self.scratch_stress.shape[0] < st.cap:
+                    self.scratch_stress = np.zeros((st.cap, 4))
+                shepard_stress(st.n_total, st.n_owned, st.x, st.stress, st.vol,
+                               self.cell_start, self.order, self.ncell, self.h,
+                               self.scratch_stress[:, :4], self.scratch[0])
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()
