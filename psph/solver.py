@@ -136,8 +136,7 @@ class Simulation:
         self.sums = np.zeros((self.store.cap, NSUMS))
         self.astress = np.zeros((1, 3))
         self.w_dx = w_cubic(scene.particles.dx, self.h)
-        self.scratch = np.zeros((2, self.store.cap))
-        self.scratch_stress = np.zeros((0, 4))
+        self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
@@ -249,23 +248,17 @@ class Simulation:
         """Eq. (46) on owned particles, then the halo and ghosts again so that every copy
         of a particle carries its filtered pressure (positions have not moved yet)."""
         st = self.store
-        if self.scratch.shape[1] < st.cap:
-            self.scratch = np.zeros((2, st.cap))
+        if self.scratch_moments.shape[0] < st.cap:
+            self.scratch_moments = np.zeros((st.cap, 18))
+        mom = self.scratch_moments
         shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
                          st.drained_from, self.t, self.cell_start, self.order, self.ncell,
-                         self.h, self.scratch[0], self.scratch[1])
+                         self.h, mom)
         if self.scene.stabilisation.shepard_stress:
-            if self.scene.stabilisation.stress_filter == "mls":
-                if self.scratch_stress.shape[0] < st.cap or self.scratch_stress.shape[1] < 18:
-                    self.scratch_stress = np.zeros((st.cap, 18))
-                mls_stress(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
-                           self.order, self.ncell, self.h, self.scratch_stress)
-            else:
-                if self.scratch_stress.shape[0] < st.cap:
-                    self.scratch_stress = np.zeros((st.cap, 4))
-                shepard_stress(st.n_total, st.n_owned, st.x, st.stress, st.vol,
-                               self.cell_start, self.order, self.ncell, self.h,
-                               self.scratch_stress[:, :4], self.scratch[0])
+            stress_filter = mls_stress if self.scene.stabilisation.stress_filter == "mls" \
+                else shepard_stress
+            stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
+                          self.order, self.ncell, self.h, mom)
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()

@@ -42,7 +42,7 @@ def _filtered(x, p, h, n_owned=None, drained=None, t=0.0):
     q_prev = p - 1.0  # a uniform TPI increment of 1 Pa per step
     drained = np.full(n, math.inf) if drained is None else drained
     shepard_pressure(n, n if n_owned is None else n_owned, x, q, q_prev, np.full(n, 1e-4),
-                     drained, t, cell_start, order, ncell, h, np.zeros(n), np.zeros(n))
+                     drained, t, cell_start, order, ncell, h, np.zeros((n, 2)))
     assert np.allclose(q - q_prev, 1.0, rtol=0, atol=1e-9 * max(1.0, np.abs(p).max()))
     return q
 
@@ -93,12 +93,22 @@ def test_shepard_writes_owned_rows_only():
     assert not np.array_equal(q[:half], p[:half])
 
 
+def _checkerboard_stress(n, dx):
+    """A lattice block with +-10 kPa of odd-even mode on a uniform stress; the mode's sign."""
+    x = jittered_lattice(n, dx, 0.0)
+    i = np.round(x / dx - 0.5).astype(int)
+    sign = np.where((i[:, 0] + i[:, 1]) % 2 == 0, 1.0, -1.0)
+    stress = np.tile([-3e4, -5e4, -3e4, 0.0], (len(x), 1))
+    stress[:, :3] += 1e4 * sign[:, None]
+    return x, stress, sign
+
+
 def _filtered_stress(x, stress, h):
     n = len(x)
     cell_start, order, ncell = cell_lists(x, h)
     out = stress.copy()
     shepard_stress(n, n, x, out, np.full(n, 1e-4), cell_start, order, ncell, h,
-                   np.zeros((n, 4)), np.zeros(n))
+                   np.zeros((n, 5)))
     return out
 
 
@@ -121,11 +131,7 @@ def test_stress_regularisation_removes_the_odd_even_mode():
     """A checkerboard of +-10 kPa on a uniform stress (the mode the pair-symmetric
     divergence of Eq. (26) cannot see) is cut to under a fifth in the interior."""
     dx, n = 0.01, 20
-    x = jittered_lattice(n, dx, 0.0)
-    i = np.round(x / dx - 0.5).astype(int)
-    sign = np.where((i[:, 0] + i[:, 1]) % 2 == 0, 1.0, -1.0)
-    stress = np.tile([-3e4, -5e4, -3e4, 0.0], (len(x), 1))
-    stress[:, :3] += 1e4 * sign[:, None]
+    x, stress, sign = _checkerboard_stress(n, dx)
     got = _filtered_stress(x, stress, 1.2 * dx)
     inner = _interior(x, dx, n, 3)
     assert np.abs(got[inner, 1] + 5e4).max() < 0.2e4
@@ -157,11 +163,7 @@ def test_mls_stress_keeps_linear_stress_also_at_free_surfaces():
 def test_mls_stress_removes_the_odd_even_mode():
     """The same checkerboard as for the Shepard filter is cut to under a fifth."""
     dx, n = 0.01, 20
-    x = jittered_lattice(n, dx, 0.0)
-    i = np.round(x / dx - 0.5).astype(int)
-    sign = np.where((i[:, 0] + i[:, 1]) % 2 == 0, 1.0, -1.0)
-    stress = np.tile([-3e4, -5e4, -3e4, 0.0], (len(x), 1))
-    stress[:, :3] += 1e4 * sign[:, None]
+    x, stress, sign = _checkerboard_stress(n, dx)
     got = _mls_filtered(x, stress, 1.2 * dx)
     inner = _interior(x, dx, n, 3)
     mode = (got[inner, 1] - (-5e4)) * sign[inner]

@@ -114,3 +114,23 @@ def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
     lo[1] = c1min - 1
     ncell[0] = c0max - c0min + 3
     ncell[1] = c1max - c1min + 3
+
+
+def cell_lists(x: np.ndarray, h: float,
+               key: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(cell_start, order, ncell) of a whole particle set in one go, cells of side 2h
+    (the pair sweeps' layout); for verification drivers and tests, not the time loop,
+    which keeps its arrays. key: the sort key within a cell (default: the index)."""
+    n = len(x)
+    key = np.arange(n, dtype=float) if key is None else key
+    cs = 2 * h
+    origin = x.min(axis=0) - 4 * cs
+    lo = np.zeros(2, np.int64)
+    ncell = np.zeros(2, np.int64)
+    grid_bounds(x, n, origin, cs, np.array([1 << 40, 1 << 40], np.int64), lo, ncell)
+    nc = int(ncell.prod())
+    cell_start = np.zeros(nc + 1, np.int64)
+    order = np.zeros(n, np.int64)
+    bin_particles(x, key, n, origin, cs, lo, ncell, np.zeros(n, np.int64), cell_start,
+                  np.zeros(nc + 1, np.int64), order)
+    return cell_start, order, ncell

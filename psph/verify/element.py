@@ -47,9 +47,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from psph.kernels.interactions import NSUMS, pair_sums
-from psph.kernels.neighbours import bin_particles, grid_bounds
+from psph.kernels.neighbours import cell_lists
 from psph.kernels.plasticity import dp_return
 from psph.kernels.update import SCHEME_EXPLICIT, advance
+from psph.physics.material import ElasticSoil
 
 PATHS = ("compression", "shear")
 DEFAULT_RATE = {"compression": 5e-3, "shear": 1e-2}  # 1/s: 2 % axial, 4 % shear at 4 s
@@ -83,12 +84,11 @@ class ElementParams:
     side: int = 11  # particles per side (odd: a centre particle)
 
     @property
-    def shear(self) -> float:
-        return self.E / (2 * (1 + self.nu))
-
-    @property
-    def lam(self) -> float:
-        return self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
+    def soil(self) -> ElasticSoil:
+        """The elastic constants (shear, lam, ...) as the solver derives them."""
+        return ElasticSoil(E=self.E, nu=self.nu, rho_s=self.rho_s, rho_l=self.rho_l,
+                           K_l=self.K_l, gamma_l=self.rho_l * self.g,
+                           porosity=self.porosity, conductivity=self.perm)
 
     def plasticity(self, psi_deg: float) -> np.ndarray:
         """(phi_p, phi_r, c_p, c_r, psi0, eta, s_f) as in `material.plasticity_parameters`."""
@@ -223,9 +223,9 @@ def reference_element(path: str, psi_deg: float, drained: bool, moment: Moment =
     def step(st, e, mom):
         stress, eps_p, n, p = st
         grad = velocity_gradient(path, rate, e)
-        trial = jaumann_elastic(stress, plain_gradient(grad, mom), par.lam, par.shear,
+        trial = jaumann_elastic(stress, plain_gradient(grad, mom), par.soil.lam, par.soil.shear,
                                 par.dt)
-        r = dp_return(*trial, eps_p, par.lam + 2 * par.shear / 3, par.shear, *dp)
+        r = dp_return(*trial, eps_p, par.soil.lam + 2 * par.soil.shear / 3, par.soil.shear, *dp)
         div = grad[0, 0] + grad[1, 1]
         p_new = 0.0 if drained else p - par.dt * par.K_l / n * div
         new = (np.array(r[:4]), eps_p + r[5], n + par.dt * (1 - n) * div, p_new)
@@ -245,22 +245,6 @@ def _lattice(par: ElementParams) -> tuple[np.ndarray, int]:
     x = np.array(np.meshgrid(g, g, indexing="xy")).reshape(2, -1).T.copy()
     centre = int(np.argmin(np.hypot(x[:, 0], x[:, 1])))
     return x, centre
-
-
-def _cell_lists(x: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Cell list of the whole set (as tests/helpers.py), cell size 2h."""
-    n = len(x)
-    cs = 2 * h
-    origin = x.min(axis=0) - 4 * cs
-    lo = np.zeros(2, np.int64)
-    ncell = np.zeros(2, np.int64)
-    grid_bounds(x, n, origin, cs, np.array([1 << 40, 1 << 40], np.int64), lo, ncell)
-    nc = int(ncell.prod())
-    cell_start = np.zeros(nc + 1, np.int64)
-    order = np.zeros(n, np.int64)
-    bin_particles(x, np.arange(n, dtype=float), n, origin, cs, lo, ncell, np.zeros(n, np.int64),
-                  cell_start, np.zeros(nc + 1, np.int64), order)
-    return cell_start, order, ncell
 
 
 class _SphBlock:
@@ -307,7 +291,7 @@ class _SphBlock:
         bad = advance(self.n, self.sums, st["x"], st["u"], v, st["stress"], st["p"],
                       st["p_prev"], st["poro"], self.poro0, st["vol"], self.vol0, st["rho"],
                       st["perm"], st["acc"], self.drained_from, self.t, self.load_index,
-                      self.traction, self.load_value, par.dt, par.lam, par.shear, par.K_l,
+                      self.traction, self.load_value, par.dt, par.soil.lam, par.soil.shear, par.K_l,
                       par.rho_l * par.g, par.rho_l, par.rho_s, 0.0, 0.0, 0.0, SCHEME_EXPLICIT,
                       0.0, 0.0, False, self.correct_strain, self.box, True, self.dp,
                       st["eps_p"], 0, par.perm, 0.0, True, 0.0)
@@ -319,7 +303,7 @@ class _SphBlock:
     def moment(self) -> np.ndarray:
         """Moment matrix M of Eq. (22) at the centre at the current positions: the plain
         kernel gradient of a linear field v = L x is L M there."""
-        self.evaluate(_cell_lists(self.state["x"], self.h), 0.0)  # fills self.sums
+        self.evaluate(cell_lists(self.state["x"], self.h), 0.0)  # fills self.sums
         return self.sums[self.centre, 0:4].reshape(2, 2).copy()
 
 
@@ -339,7 +323,7 @@ def sph_element(path: str, psi_deg: float, drained: bool, correct_strain: bool =
     marks = set(_checkpoint_steps(par).tolist())
     e_v = 0.0
     for k in range(1, par.steps + 1):
-        cells = _cell_lists(blk.state["x"], blk.h)
+        cells = cell_lists(blk.state["x"], blk.h)
         e_v, blk.state, _ = servo_step(lambda e, cl=cells: blk.evaluate(cl, e), target, e_v,
                                        1e-4 * rate, 1e-9 * abs(target))
         blk.t = k * par.dt
@@ -374,7 +358,7 @@ def error_scale(ref: dict[str, np.ndarray], key: str, **params) -> float:
     par = replace(ElementParams(), **params)
     natural = abs(par.sigma0)
     if key == "eps_v":
-        natural /= par.lam + 2 * par.shear / 3
+        natural /= par.soil.lam + 2 * par.soil.shear / 3
     peak = float(np.max(np.abs(ref[key])))
     return peak if peak > 0.01 * natural else natural
 
