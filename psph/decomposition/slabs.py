@@ -13,6 +13,7 @@ from mpi4py import MPI
 
 from psph.decomposition.balance import balanced_cuts
 from psph.errors import NumericalError
+from psph.kernels.exact_sum import exact_total
 from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
 from psph.particles import ParticleStore
 
@@ -288,6 +289,13 @@ class Slabs:
         out = np.empty_like(values)
         self.comm.Allreduce(values, out, op=MPI.SUM)
         return out
+
+    def exact_sum(self, parts: np.ndarray) -> float:
+        """Correctly rounded sum over ranks of each rank's exact expansion `parts`
+        (`psph.kernels.exact_sum`): the same bits on any rank count. Collective."""
+        if self.size == 1:
+            return exact_total([parts])
+        return exact_total(self.comm.allgather(np.ascontiguousarray(parts)))
 
     def allreduce_max(self, value: float) -> float:
         return self.comm.allreduce(value, op=MPI.MAX)

@@ -1,0 +1,86 @@
+"""Exact sums of per-particle terms, for reductions that do not depend on the partition.
+
+A floating-point sum depends on the order of its terms, so a dot product over the owned
+particles changes with the way they are split over ranks (and a conjugate-gradient solve
+with it, iteration counts included). Here each rank accumulates its terms into a
+non-overlapping expansion (Shewchuk 1997, "Adaptive precision floating-point arithmetic
+and fast robust geometric predicates"; the algorithm of Python's `math.fsum`): a few
+doubles whose exact sum is the exact sum of the rank's terms. The ranks' expansions are
+then gathered and summed by `math.fsum`, correctly rounded (`Slabs.exact_sum`). The
+result is the correctly rounded exact sum of all terms: the same bits on any rank count.
+
+The terms themselves (a_k b_k rounded once) depend only on the particle, not on the
+partition, so rounding the products is harmless.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+# the parts of a non-overlapping expansion hold disjoint bits of the 2098-bit range of
+# doubles, so at most 2098 of them (terms spread over 600 decades already need 84; data
+# of one field need a handful)
+EXPANSION_CAP = 2100
+
+
+@nb.njit(cache=True, inline="always")
+def _grow(partials: np.ndarray, m: int, x: float) -> int:
+    """Add x to the expansion partials[:m] (TwoSum of each part, zeros dropped)."""
+    i = 0
+    for j in range(m):
+        y = partials[j]
+        if abs(x) < abs(y):
+            x, y = y, x
+        hi = x + y
+        lo = y - (hi - x)
+        if lo != 0.0:
+            partials[i] = lo
+            i += 1
+        x = hi
+    partials[i] = x
+    return i + 1
+
+
+@nb.njit(cache=True)
+def dot_expansion(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) -> int:
+    """Expansion of sum_k a[k] b[k] over k < n into `partials` (EXPANSION_CAP,); returns
+    its length, or -1 if a term is not finite (partials[0] then holds it)."""
+    m = 0
+    for k in range(n):
+        x = a[k] * b[k]
+        if not math.isfinite(x):
+            partials[0] = x
+            return -1
+        m = _grow(partials, m, x)
+    return m
+
+
+@nb.njit(cache=True)
+def sum_expansion(a: np.ndarray, n: int, partials: np.ndarray) -> int:
+    """Expansion of sum_k a[k] over k < n; as `dot_expansion`."""
+    m = 0
+    for k in range(n):
+        x = a[k]
+        if not math.isfinite(x):
+            partials[0] = x
+            return -1
+        m = _grow(partials, m, x)
+    return m
+
+
+def local_parts(partials: np.ndarray, m: int) -> np.ndarray:
+    """The expansion as an array to gather (a non-finite term as a single part)."""
+    return partials[:1] if m < 0 else partials[:m]
+
+
+def exact_total(parts: list[np.ndarray]) -> float:
+    """Correctly rounded sum of the gathered expansions of all ranks (NaN if a term was
+    not finite or the sum overflows)."""
+    flat = np.concatenate(parts) if parts else np.zeros(0)
+    if not np.all(np.isfinite(flat)):
+        return math.nan
+    try:
+        return math.fsum(flat.tolist())
+    except OverflowError:
+        return math.nan
