@@ -148,6 +148,9 @@ class Stabilisation(_Model):
     damping: Annotated[float, Field(ge=0.0)] = 0.0  # eta_d of Eq. (44)
     av_alpha: Annotated[float, Field(ge=0.0)] = 0.1  # artificial viscosity in C_ij, Eq. (26)
     av_beta: Annotated[float, Field(ge=0.0)] = 0.1
+    # the viscosity's sound speed: "solid" sqrt(E / rho_s) of Eq. (41), or "undrained"
+    # c_sp of Eq. (28), the speed of the coupled mode the explicit Eq. (25) carries
+    av_sound_speed: Literal["solid", "undrained"] = "solid"
     corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
     shepard_every: Annotated[int, Field(ge=0)] = 0  # m of Eq. (46): filter p every m steps
     # with the Shepard step, also filter the effective stress (stress regularisation, the

@@ -145,6 +145,9 @@ class Simulation:
             else np.zeros(2)
         self.damping = self.soil.damping_coefficient(scene.stabilisation.damping, self.h)
         self.coupled = scene.pressure.scheme != "none"
+        self.av_sound_speed = (self.soil.undrained_sound_speed
+                               if self.coupled and scene.stabilisation.av_sound_speed
+                               == "undrained" else self.soil.sound_speed)
         self.plastic = scene.material.model == "drucker_prager"
         self.dp = plasticity_parameters(scene)
         self.acc_term = self.coupled and scene.pressure.acceleration_term
@@ -282,7 +285,7 @@ class Simulation:
                           st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
                           st.acc, self.cell_start, self.order, self.ncell, self.h, alpha,
                           sb.av_alpha, sb.av_beta,
-                          self.soil.sound_speed, rl * self.body[0], rl * self.body[1],
+                          self.av_sound_speed, rl * self.body[0], rl * self.body[1],
                           self.coupled, self.acc_term, self.sums, self.astress, as_n,
                           self.w_dx, self.symplectic, self.pairs, self.pair_g)
             if n >= 0:

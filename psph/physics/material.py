@@ -34,6 +34,12 @@ class ElasticSoil:
         """c_sp = sqrt(E / rho_s), Eq. (41); also the artificial-viscosity sound speed."""
         return math.sqrt(self.E / self.rho_s)
 
+    @property
+    def undrained_sound_speed(self) -> float:
+        """c_sp = sqrt((K_l / n + 4 G / 3) / (n rho_l + n_s rho_s)), Eq. (28)."""
+        return math.sqrt((self.K_l / self.porosity + 4.0 * self.shear / 3.0)
+                         / self.mixture_density)
+
     def damping_coefficient(self, eta_d: float, h: float) -> float:
         """c_d = eta_d sqrt(E / (rho_s h^2)), Eq. (44) (1/s)."""
         return eta_d * math.sqrt(self.E / (self.rho_s * h * h))
