@@ -12,6 +12,7 @@ from psph.decomposition.slabs import Slabs, slab_cuts
 from psph.errors import Interrupted
 from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
+from psph.kernels.update import SCHEME_PROJECTION
 from psph.physics.initial import initial_particles
 from psph.scene import Scene, check_restart_scene, to_toml
 from psph.solver import Simulation
@@ -297,6 +298,9 @@ def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
            "settlement": tot[0] / tot[1] if tot[1] > 0 else 0.0,
            "kinetic_energy": tot[2], "p_max": pmax, "p_min": pmin,
            "imbalance": sim.slabs.imbalance(st)}
+    if sim.stepping.scheme_main == SCHEME_PROJECTION:
+        row["cg_iterations"] = sim.solve["iterations"]
+        row["cg_residual"] = sim.solve["residual"]
     for k, name in enumerate(probes):
         row[f"p_{name}"] = tot[3 + 3 * k]
         row[f"ux_{name}"] = tot[4 + 3 * k]
@@ -351,6 +355,16 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
         },
         "stage_seconds": stages,
     }
+    if sim.stepping.scheme_main == SCHEME_PROJECTION:
+        sv = sim.solve
+        summary["pressure_solve"] = {
+            "method": "matrix-free conjugate gradients, Jacobi, exact (rank-independent) "
+                      "inner products",
+            "tolerance": sim.scene.pressure.tolerance,
+            "iterations_mean": sv["iterations_total"] / max(steps, 1),
+            "iterations_max": sv["iterations_max"],
+            "steps_not_converged": sv["not_converged"],
+            "dt_limit_in_force": "dt_solid_eq41" if sim.scene.time.dt is None else "time.dt"}
     if sim.equilibrium:
         summary["equilibrate"] = sim.equilibrium
     if monitor is not None:

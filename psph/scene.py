@@ -120,9 +120,10 @@ class Load(_Model):
 
 
 class Pressure(_Model):
-    """Pore-pressure update: explicit Eq. (25), TPI Eq. (38)-(39), or none (dry)."""
+    """Pore-pressure update: explicit Eq. (25), TPI Eq. (38)-(39), a projection (one
+    linear solve of Eq. 29 per step, psph/kernels/projection.py), or none (dry)."""
 
-    scheme: Literal["tpi", "explicit", "none"] = "tpi"
+    scheme: Literal["tpi", "explicit", "projection", "none"] = "tpi"
     alpha: Annotated[float, Field(ge=0.0, le=1.0)] = 0.5
     R: Pos = 17.0  # TPI amplifier of the fluid time step, Eq. (40)
     beta: Annotated[float, Field(ge=0.0)] = 0.0  # Eq. (47) for p < 0 (paper: 0.04); 0: off
@@ -131,6 +132,9 @@ class Pressure(_Model):
     # free-surface particles: true: cannot hold positive pore pressure (ponding, Section
     # 4.4); "drained": p = 0 there (atmospheric, no suction either); false: no condition
     ponding: bool | Literal["drained"] = False
+    # projection: relative residual of the conjugate-gradient solve, and its iteration cap
+    tolerance: Annotated[float, Field(gt=0.0, lt=1.0)] = 1.0e-9
+    max_iterations: Annotated[int, Field(ge=1)] = 2000
 
 
 class Time(_Model):
@@ -296,6 +300,9 @@ class Scene(_Model):
                 if not lo[d] <= pt[d] <= hi[d]:
                     raise _Rule(f"output.probes.{name}", pt,
                                 f"probe outside the domain [{lo}, {hi}]")
+        if self.pressure.scheme == "projection" and self.time.integrator != "symplectic":
+            raise _Rule("pressure.scheme", "projection",
+                        "needs time.integrator = 'symplectic' (the solve follows the kick)")
         if self.time.end is None:
             if self.verification.reference == "none" or not self.verification.tv:
                 raise _Rule("time.end", None, "required (no verification.tv to derive it from)")

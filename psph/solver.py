@@ -15,13 +15,29 @@ import numpy as np
 
 from psph.errors import NumericalError
 from psph.kernels.artificial_stress import artificial_stress
+from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, local_parts
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import NSUMS, pair_sums, velocity_gradient_sums
+from psph.kernels.laplacian import apply_operator, fixed_rhs, operator_diagonal, pair_weights
 from psph.kernels.neighbours import bin_particles, grid_bounds
+from psph.kernels.projection import (
+    imposed_increments,
+    mirror_to_ghosts,
+    pressure_correction,
+    projection_rhs,
+)
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.spline import w_cubic
-from psph.kernels.update import SCHEME_EXPLICIT, SCHEME_NONE, SCHEME_TPI, advance, kick
+from psph.kernels.update import (
+    SCHEME_EXPLICIT,
+    SCHEME_NONE,
+    SCHEME_PROJECTION,
+    SCHEME_TPI,
+    advance,
+    kick,
+)
 from psph.particles import ParticleStore
+from psph.pcg import PCGWork, pcg
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
@@ -61,8 +77,8 @@ class TimeStepping:
 
 def time_stepping(scene: Scene) -> TimeStepping:
     dt_s = solid_dt_limit(scene)
-    scheme = {"none": SCHEME_NONE, "explicit": SCHEME_EXPLICIT, "tpi": SCHEME_TPI}[
-        scene.pressure.scheme]
+    scheme = {"none": SCHEME_NONE, "explicit": SCHEME_EXPLICIT, "tpi": SCHEME_TPI,
+              "projection": SCHEME_PROJECTION}[scene.pressure.scheme]
     limits = {"dt_solid_eq41": dt_s}
     if scheme == SCHEME_NONE:
         dt_main = dt_s
@@ -73,7 +89,12 @@ def time_stepping(scene: Scene) -> TimeStepping:
         limits["dt_fluid_eq42"] = dt_l
         limits["dt_undrained_eq41"] = dt_u
         dt_exp = min(dt_s, dt_l, dt_u)
-        dt_main = dt_exp if scheme == SCHEME_EXPLICIT else min(dt_s, scene.pressure.R * dt_l)
+        if scheme == SCHEME_EXPLICIT:
+            dt_main = dt_exp
+        elif scheme == SCHEME_PROJECTION:
+            dt_main = dt_s  # the solve carries the fluid and the undrained wave
+        else:
+            dt_main = min(dt_s, scene.pressure.R * dt_l)
     if scene.time.dt is not None:
         dt_main = scene.time.dt
     return TimeStepping(dt_main, dt_exp, scheme, scene.pressure.explicit_until, limits)
@@ -120,6 +141,12 @@ class Simulation:
         # ghost velocities as on a free-slip wall, for the stretching rates (interactions.py);
         # without a fixed wall they are the velocities themselves
         self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() else None
+        self.ghost_src = np.zeros(0, np.int64)
+        self.solve = {"iterations": 0, "residual": 0.0, "iterations_total": 0,
+                      "iterations_max": 0, "not_converged": 0}
+        self._proj = {}
+        self._pcg_work = PCGWork()
+        self._dot_buf = np.zeros(EXPANSION_CAP)
 
         margin = 2.0 * self.h
         self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
@@ -192,8 +219,10 @@ class Simulation:
         stages.append(Stage(name, self._interactions))
         if self.symplectic:
             stages.append(Stage("kick+velocity_sweep", self._kick))
-        pname = {SCHEME_NONE: "dry", SCHEME_EXPLICIT: "explicit",
-                 SCHEME_TPI: "tpi"}[self.stepping.scheme_main]
+        if self.stepping.scheme_main == SCHEME_PROJECTION:
+            stages.append(Stage("pressure_solve[pcg,jacobi]+correction", self._project))
+        pname = {SCHEME_NONE: "dry", SCHEME_EXPLICIT: "explicit", SCHEME_TPI: "tpi",
+                 SCHEME_PROJECTION: "projection"}[self.stepping.scheme_main]
         if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
             pname = "explicit->tpi"
         model = ",drucker_prager" if self.plastic else ",elastic"
@@ -222,10 +251,13 @@ class Simulation:
     def _ghosts(self) -> None:
         st = self.store
         while True:
+            if self.ghost_src.shape[0] < st.cap:
+                self.ghost_src = np.zeros(st.cap, np.int64)
             ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids),
                              self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
                              st.x, st.v, self.v_slip, st.stress, st.p, st.p_prev, st.poro,
-                             st.vol, st.rho, st.perm, st.acc, st.key, self.head_b)
+                             st.vol, st.rho, st.perm, st.acc, st.key, self.head_b,
+                             self.ghost_src)
             if ng >= 0:
                 st.n_ghost = ng
                 return
@@ -328,6 +360,84 @@ class Simulation:
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
+
+    def _projection_arrays(self, cap: int, n_pairs: int) -> dict:
+        a = self._proj
+        if a.get("cap", 0) < cap:
+            a.update(cap=cap, storage=np.zeros(cap), rhs=np.zeros(cap), diag=np.zeros(cap),
+                     dp=np.zeros((cap, 1)), imposed=np.zeros((cap, 2)),
+                     fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)))
+        if a.get("w", np.zeros(0)).shape[0] < n_pairs:
+            a["w"] = np.zeros(max(n_pairs, self.pairs.shape[0]))
+        return a
+
+    def _refresh_rows(self, field: np.ndarray) -> None:
+        """Halo rows from their owners, then wall ghosts from the rows they mirror."""
+        st = self.store
+        self.slabs.refresh_halo(field)
+        if st.n_ghost:
+            mirror_to_ghosts(st.n_real, st.n_total, self.ghost_src, field)
+
+    def _dot(self, a: np.ndarray, b: np.ndarray) -> float:
+        """Inner product over the owned rows, the same bits on any rank count."""
+        buf = self._dot_buf
+        m = dot_expansion(a, b, self.store.n_owned, buf)
+        return self.slabs.exact_sum(local_parts(buf, m))
+
+    def _project(self) -> None:
+        """The pressure increment of the step from one solve of Eq. (29) (module
+        `psph.kernels.projection`), then the velocity correction and the velocity sums of
+        the corrected velocity. Collective (the solve's reductions and halo refreshes)."""
+        st = self.store
+        s = self.soil
+        n, npairs = st.n_owned, self.n_pairs
+        a = self._projection_arrays(st.cap, npairs)
+        w, dp, imposed, fixed = a["w"], a["dp"], a["imposed"], a["fixed"]
+        dt = self.dt
+        pair_weights(npairs, self.pairs, self.pair_g, st.x, st.perm, st.rho,
+                     1.0 / s.gamma_l, dt, w)
+        projection_rhs(n, self.sums, st.p, st.perm, st.vol, st.poro, s.rho_l, self.body[0],
+                       self.body[1], s.gamma_l, s.K_l, dt, a["storage"], a["rhs"])
+        imposed_increments(n, self.sums, st.drained_from, self.t, self.ponding == 2,
+                           st.p, imposed)
+        self._refresh_rows(imposed)
+        nt = st.n_total
+        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
+        value = imposed[:, 1]
+        fixed_rhs(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, value, a["rhs"])
+        operator_diagonal(n, npairs, self.pairs, w, st.vol, a["storage"], a["diag"])
+        # warm start: the last step's increment p^n - p^(n-1); imposed rows at their value
+        d = dp[:, 0]
+        np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
+        np.copyto(d[:n], value[:n], where=fixed[:n])
+        self._refresh_rows(dp)
+
+        def apply(q, out):
+            apply_operator(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, q, out)
+
+        def refresh(q):
+            self._refresh_rows(q.reshape(-1, 1))
+
+        pc = self.scene.pressure
+        res = pcg(apply, a["diag"], a["rhs"], d, n, self._dot, refresh, pc.tolerance,
+                  pc.max_iterations, self._pcg_work)
+        sv = self.solve
+        sv["iterations"], sv["residual"] = res.iterations, res.residual
+        sv["iterations_total"] += res.iterations
+        sv["iterations_max"] = max(sv["iterations_max"], res.iterations)
+        sv["not_converged"] += not res.converged
+        self._refresh_rows(dp)
+        pressure_correction(n, npairs, self.pairs, self.pair_g, st.vol, st.rho, d, dt,
+                            a["dv"], st.v, st.acc)
+        st.p_prev[:n] = st.p[:n]
+        st.p[:n] += d[:n]
+        self.slabs.refresh_halo(st.v)
+        self.slabs.refresh_halo(st.p.reshape(-1, 1))
+        self.slabs.refresh_halo(st.p_prev.reshape(-1, 1))
+        if len(self.wall_axis):
+            self._ghosts()
+        velocity_gradient_sums(st.n_owned, st.n_real, npairs, self.pairs, self.pair_g, st.v,
+                               self.v_slip, st.poro, st.vol, self.coupled, self.sums)
 
     # ------------------------------------------------------------------ stepping
 

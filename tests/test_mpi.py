@@ -5,6 +5,7 @@ Run with `mpirun -n 2 python -m pytest --with-mpi -m mpi`. Rank 0 first runs the
 block moves every particle across the slab cut, so migration is exercised too.
 """
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,8 @@ from tests.helpers import shared_tmp
 
 COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification.tv=[]",
           "output.times=[0.005, 0.012]"]  # explicit loading, drain at 0.01 s, then TPI
+PROJECTION = ["pressure.scheme='projection'", "time.integrator='symplectic'",
+              "time.dt=2.4e-5"]
 
 
 def falling_block(tmp: Path) -> Path:
@@ -181,3 +184,19 @@ def test_gravity_loading_and_stress_regularisation_one_vs_two_ranks_bitwise(
                          'stabilisation.stress_filter="mls"', "time.end=0.1",
                          "output.interval=0.05"])
     _one_vs_two(comm, scene, out)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_pressure_projection_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """The projection's conjugate-gradient solve (issue 14): exact inner products and
+    recorded-pair operators make iterates, iteration counts and particles the same bits."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    scene = load_scene("terzaghi", COLUMN + PROJECTION)
+    _one_vs_two(comm, scene, out)
+    if comm.Get_rank() == 0:
+        one = json.loads((out / "one" / "summary.json").read_text())["pressure_solve"]
+        two = json.loads((out / "two" / "summary.json").read_text())["pressure_solve"]
+        assert one == two and one["iterations_max"] > 5

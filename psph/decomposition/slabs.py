@@ -77,10 +77,12 @@ class Slabs:
             self._idx_cap = cap
 
     def _send_buffer(self, name: str, rows: int, width: int) -> np.ndarray:
-        buf = self._send.get(name)
-        if buf is None or buf.shape[0] < rows or buf.shape[1] != width:
+        # one buffer per name and width: fields of different widths refreshed in turn
+        # must not regrow a shared one every call
+        buf = self._send.get((name, width))
+        if buf is None or buf.shape[0] < rows:
             buf = np.zeros((max(rows, 2 * (buf.shape[0] if buf is not None else 16)), width))
-            self._send[name] = buf
+            self._send[(name, width)] = buf
         return buf
 
     def exchange(self, store: ParticleStore, width: float) -> None:

@@ -47,13 +47,15 @@ def _mirror(src, dst, axis, pos, fixed, x, v, v_slip, stress, p, p_prev, poro, v
 
 @nb.njit(cache=True)
 def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
-                x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b):
+                x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b, src):
     """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
     or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
     per wall / corner, so the neighbour order is the same on any number of ranks.
     head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift.
     v_slip: rows 0..n_real-1 get v; ghosts get the free-slip mirror (v itself may be
-    passed when no wall is fixed)."""
+    passed when no wall is fixed).
+    src: src[g] = the real row a ghost g mirrors (corner ghosts too), for fields that are
+    mirrored again later (the search direction of the pressure solve)."""
     nw = wall_axis.shape[0]
     for j in range(n_real):
         v_slip[j, 0] = v[j, 0]
@@ -69,6 +71,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
             _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], x, v, v_slip, stress, p,
                     p_prev, poro, vol, rho, perm, acc, key, head_b)
             key[g] = key[j] + key_stride * (1 + w)
+            src[g] = j
             g += 1
             for w2 in range(w + 1, nw):
                 if wall_axis[w2] == wall_axis[w]:
@@ -82,6 +85,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], x, v, v_slip,
                         stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
+                src[g] = j
                 g += 1
     return g - n_real
 

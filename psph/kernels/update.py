@@ -16,6 +16,7 @@ from psph.kernels.plasticity import dp_return
 SCHEME_NONE = 0
 SCHEME_EXPLICIT = 1
 SCHEME_TPI = 2
+SCHEME_PROJECTION = 3  # p^(n+1) solved before `advance` (psph/kernels/projection.py)
 
 
 @nb.njit(cache=True, inline="always")
@@ -80,7 +81,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     lam, shear: Lame constants (Pa); bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3);
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
     1 explicit Eq. (25), 2 TPI Eq. (38), with Eq. (47) for p < 0 when beta > 0 (alpha,
-    beta: Eq. 39 and 47); p = 0 is imposed where drained_from <= t.
+    beta: Eq. 39 and 47), 3 projection (p already solved); p = 0 is imposed where
+    drained_from <= t.
     plastic: the elastic trial stress is returned to the Drucker-Prager surface with the
     parameters dp = (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) (Eq. 13-19) and eps_p
     accumulates the equivalent plastic strain.
@@ -165,6 +167,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 rate = bulk_water / poro[i] * (lap / gamma_l - div_v + inv_g * div_ka)
                 p_prev[i] = p[i]
                 p[i] += dt * rate
+            elif scheme == SCHEME_PROJECTION:
+                pass  # p and p_prev were set by the pressure solve
             elif s[16] > 0.0:
                 # TPI, Eq. (38) with B of Eq. (36); s[17] holds sum A_ij p_j^(t+alpha)
                 b_i = -gamma_l * div_v + head + rho_l * div_ka - e_i

@@ -1,0 +1,93 @@
+"""Kernels of the pressure projection (`pressure.scheme = "projection"`, issue 14).
+
+After the kick v* = v^n + dt a^n (a^n with the pore pressure p^n), the increment
+dp = p^(n+1) - p^n solves the mass balance Eq. (29) at n+1 with the fluid storage kept,
+
+    n / (K_l dt) dp - div((k / gamma_l + dt / rho) grad dp) = div(k grad(p^n + psi)) / gamma_l
+                                                             - div v*,
+
+where the dt / rho part is the divergence of the velocity correction
+v^(n+1) = v* - (dt / rho) grad dp (an approximate projection: the operator is the SPH
+Laplacian of `laplacian.py`, the correction the pair-symmetric gradient of Eq. 26).
+The right-hand side is the explicit rate of Eq. (25) times n / K_l.
+"""
+
+import numba as nb
+import numpy as np
+
+from psph.kernels.update import _inverse_moment
+
+
+@nb.njit(cache=True, error_model="numpy")
+def projection_rhs(n_owned: int, sums: np.ndarray, p: np.ndarray, perm: np.ndarray,
+                   vol: np.ndarray, poro: np.ndarray, rho_l: float, b0: float, b1: float,
+                   gamma_l: float, bulk_water: float, dt: float, storage: np.ndarray,
+                   rhs: np.ndarray) -> None:
+    """storage_i = n_i / (K_l dt) and rhs_i = V_i (lap_i / gamma_l - div v*_i) with lap the
+    corrected Darcy term of Eq. (23) at p^n (as in explicit Eq. 25) and div v* from the
+    velocity sums of the kicked velocity (Gv + Gs with M^-1, Eq. 22)."""
+    for i in range(n_owned):
+        s = sums[i]
+        m00, m01, m10, m11 = _inverse_moment(s)
+        div_v = ((s[4] + s[25]) * m00 + (s[5] + s[26]) * m10
+                 + (s[6] + s[27]) * m01 + (s[7] + s[28]) * m11)
+        gp0 = s[8] * m00 + s[9] * m10
+        gp1 = s[8] * m01 + s[9] * m11
+        e_i = perm[i] * (gp0 * s[14] + gp1 * s[15])
+        head = s[18] + perm[i] * rho_l * (b0 * s[14] + b1 * s[15])
+        lap = s[17] - p[i] * s[16] - e_i + head
+        storage[i] = poro[i] / (bulk_water * dt)
+        rhs[i] = vol[i] * (lap / gamma_l - div_v)
+
+
+@nb.njit(cache=True)
+def imposed_increments(n_owned: int, sums: np.ndarray, drained_from: np.ndarray, t: float,
+                       drained_surface: bool, p: np.ndarray, out: np.ndarray) -> None:
+    """out[i] = (1, -p_i) where p^(n+1) = 0 is imposed (drained from time t on, or a
+    free-surface particle when the surface is drained: trace of M below 1.5 of 2, as in
+    `advance`), else (0, 0)."""
+    for i in range(n_owned):
+        s = sums[i]
+        if drained_from[i] <= t or (drained_surface and s[0] + s[3] < 1.5):
+            out[i, 0] = 1.0
+            out[i, 1] = -p[i]
+        else:
+            out[i, 0] = 0.0
+            out[i, 1] = 0.0
+
+
+@nb.njit(cache=True)
+def mirror_to_ghosts(n_real: int, n_total: int, src: np.ndarray, field: np.ndarray) -> None:
+    """Ghost rows take the value of the row they mirror (a pressure increment has no
+    hydrostatic shift)."""
+    for g in range(n_real, n_total):
+        for c in range(field.shape[1]):
+            field[g, c] = field[src[g], c]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray,
+                        vol: np.ndarray, rho: np.ndarray, dp: np.ndarray, dt: float,
+                        dv: np.ndarray, v: np.ndarray, acc: np.ndarray) -> None:
+    """v_i += dt a_i and acc_i += a_i with a_i = -sum_j V_j (dp_i + dp_j) grad_i W_ij / rho_i,
+    the pore-pressure part of Eq. (26) for the increment, over the recorded pairs."""
+    for i in range(n_owned):
+        dv[i, 0] = 0.0
+        dv[i, 1] = 0.0
+    for k in range(n_pairs):
+        a = pairs[k, 0]
+        b = pairs[k, 1]
+        f = dp[a] + dp[b]
+        if a < n_owned:
+            dv[a, 0] -= vol[b] * f * pair_g[k, 0]
+            dv[a, 1] -= vol[b] * f * pair_g[k, 1]
+        if b < n_owned:
+            dv[b, 0] += vol[a] * f * pair_g[k, 0]
+            dv[b, 1] += vol[a] * f * pair_g[k, 1]
+    for i in range(n_owned):
+        a0 = dv[i, 0] / rho[i]
+        a1 = dv[i, 1] / rho[i]
+        acc[i, 0] += a0
+        acc[i, 1] += a1
+        v[i, 0] += dt * a0
+        v[i, 1] += dt * a1

@@ -1,0 +1,57 @@
+"""The pressure projection (`pressure.scheme = "projection"`, issue 14): one
+conjugate-gradient solve of the mass balance Eq. (29) per step, at the solid limit of
+Eq. (41) alone.
+
+Terzaghi's column at the CI size of tests/test_terzaghi.py (dx = 0.02, k = 8e-4), with the
+loading stage solved too (no explicit stage), at dt = 2.4e-5 s: the solid cap Eq. (41),
+85x the explicit limit Eq. (42), where TPI needs alpha = 0.7 at 35x. Measured: max
+|p - p_a| / q = 0.0176 / 0.0123 / 0.0058 at T_v = 0.1 / 0.2 / 0.5, settlement error 0.23 %,
+34 CG iterations a step on average (tolerance 1e-9), 38 s.
+"""
+
+import pytest
+
+from psph.errors import SceneError
+from psph.run import run
+from psph.scene import load_scene
+from psph.solver import Simulation, time_stepping
+
+COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.5]",
+          "output.history_interval=2e-4"]
+PROJECTION = ["pressure.scheme='projection'", "time.integrator='symplectic'",
+              "pressure.explicit_until=0.0"]
+
+
+def test_projection_needs_the_symplectic_step():
+    with pytest.raises(SceneError, match="pressure.scheme.*symplectic"):
+        load_scene("terzaghi", ["pressure.scheme='projection'"])
+
+
+def test_projection_runs_at_the_solid_limit_with_its_stage():
+    from mpi4py import MPI
+
+    from psph.run import make_slabs
+
+    scene = load_scene("terzaghi", COARSE + PROJECTION)
+    scene.time.dt = None  # the scene's own dt off: the default step
+    st = time_stepping(scene)
+    assert st.dt_main == st.limits["dt_solid_eq41"]
+    assert st.dt_main > 80 * st.limits["dt_fluid_eq42"]
+    names = [s.name for s in Simulation(scene, make_slabs(scene, MPI.COMM_SELF)).stages]
+    assert names.index("kick+velocity_sweep") < names.index(
+        "pressure_solve[pcg,jacobi]+correction") < names.index("update[projection,elastic]")
+
+
+@pytest.mark.slow
+def test_terzaghi_with_the_projection_at_the_solid_limit(tmp_path):
+    scene = load_scene("terzaghi", COARSE + PROJECTION + ["time.dt=2.4e-5"])
+    summary = run(scene, tmp_path, quiet=True)
+    err = summary["errors"]
+    bars = {"0.1": 0.02, "0.2": 0.015, "0.5": 0.007}
+    for tv, bar in bars.items():
+        assert err["pressure"][tv]["max_abs_p_error_over_q"] < bar, err["pressure"]
+    assert err["settlement_max_abs_error_over_final"] < 0.005, err
+    solve = summary["pressure_solve"]
+    assert solve["steps_not_converged"] == 0 and 5 < solve["iterations_mean"] < 200
+    rows = (tmp_path / "history.csv").read_text().split("\n")[0].split(",")
+    assert "cg_iterations" in rows and "cg_residual" in rows
