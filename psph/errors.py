@@ -18,3 +18,20 @@ class Interrupted(Exception):
     checkpoint. Exit code 75 (EX_TEMPFAIL: rerun with --restart to continue)."""
 
     exit_code = 75
+
+
+# Stop signals that arrive outside a run (while Python imports, or after the run has
+# finished and restored its handlers): recorded, never the default action, which would
+# kill a finished run (a scheduler or jobs/local.sh sends them at a fixed wall time).
+EARLY_STOP_SIGNALS: list[int] = []
+
+
+def record_stop_signals() -> None:
+    """Install the recording handler for SIGTERM and SIGUSR1 (main thread only)."""
+    import signal
+
+    def _record(signum, frame) -> None:
+        EARLY_STOP_SIGNALS.append(signum)
+
+    for sig in (signal.SIGTERM, signal.SIGUSR1):
+        signal.signal(sig, _record)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from psph.decomposition.slabs import Slabs, slab_cuts
-from psph.errors import Interrupted
+from psph.errors import EARLY_STOP_SIGNALS, Interrupted
 from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
 from psph.kernels.update import SCHEME_PROJECTION
@@ -68,6 +68,9 @@ class StopRequest:
         if threading.current_thread() is threading.main_thread():
             for sig in STOP_SIGNALS:
                 self._old[sig] = signal.signal(sig, self._handle)
+        if EARLY_STOP_SIGNALS:  # one came while the process started: honour it
+            self.signal = EARLY_STOP_SIGNALS.pop()
+            EARLY_STOP_SIGNALS.clear()
         return self
 
     def _handle(self, signum, frame) -> None:

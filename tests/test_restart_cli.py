@@ -62,6 +62,24 @@ def test_sigterm_checkpoints_and_exits_75_then_restart_finishes(tmp_path):
     assert steps == sorted(set(steps)) and steps[-1] == summary["steps"]
 
 
+def test_a_stop_signal_during_start_up_is_honoured_not_fatal(tmp_path):
+    """SIGUSR1 while Python still imports (numba, mpi4py, h5py take about a second): the
+    process used to die of the signal's default action (exit -10), which a scheduler's
+    fixed wall-time signal hit in jobs/local.sh when a segment started or finished near
+    it. Now it is recorded and the run stops at once with its checkpoint (exit 75)."""
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "psph", "run", "terzaghi", "--out",
+                             str(out), "--quiet", *SMALL, "--set", "time.end=1.0"],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(0.3)
+    assert proc.poll() is None
+    proc.send_signal(signal.SIGUSR1)
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 75, err
+    assert "stopped by SIGUSR1" in err and "Traceback" not in err
+    assert read_checkpoint(out / "checkpoint.h5")[0]["t"] < 1.0
+
+
 def test_restart_refuses_changed_physics(finished):
     r = cli("run", "terzaghi", "--quiet", *SMALL, "--set", "time.end=0.006",
             "--set", "material.E=3e7", "--restart", str(finished / "checkpoint.h5"))
