@@ -367,7 +367,7 @@ class Simulation:
             a.update(cap=cap, storage=np.zeros(cap), rhs=np.zeros(cap), diag=np.zeros(cap),
                      dp=np.zeros((cap, 1)), imposed=np.zeros((cap, 2)),
                      fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)))
-        if a.get("w", np.zeros(0)).shape[0] < n_pairs:
+        if "w" not in a or a["w"].shape[0] < n_pairs:
             a["w"] = np.zeros(max(n_pairs, self.pairs.shape[0]))
         return a
 
