@@ -135,6 +135,8 @@ class Pressure(_Model):
     # projection: relative residual of the conjugate-gradient solve, and its iteration cap
     tolerance: Annotated[float, Field(gt=0.0, lt=1.0)] = 1.0e-9
     max_iterations: Annotated[int, Field(ge=1)] = 2000
+    # TPI: run a Delta t or alpha beyond the measured stability bound (`tpi_gain_limit`)
+    allow_unstable: bool = False
 
 
 class Time(_Model):
@@ -163,6 +165,10 @@ class Stabilisation(_Model):
     # the stress filter's kernel: "shepard" (zeroth order, Eq. 46's sum) or "mls" (first
     # order, ref. [14]: linear stress fields kept, also at free surfaces)
     stress_filter: Literal["shepard", "mls"] = "shepard"
+    # the porosity takes the elastic volumetric strain the stress filter moves, so that
+    # sigma' and n of Eq. (24) carry the same strain (issue 13: without it a debris-front
+    # particle compacted to n = 0.021 while the filter erased the stress that resisted it)
+    stress_filter_porosity: bool = True
     # artificial stress in C_ij of Eq. (26) (refs. [11, 18]): epsilon and exponent n;
     # default epsilon: 0.5 for Drucker-Prager soil, 0 (off) for elastic
     artificial_stress: Annotated[float, Field(ge=0.0)] | None = None
@@ -317,7 +323,27 @@ class Scene(_Model):
                             f"above the undrained wave limit {undrained_dt_limit(self):.3e} s "
                             "of the explicit pressure update (Eq. 41 with the undrained "
                             "modulus; set time.allow_dt_above_solid_limit = true to force)")
+        if self.pressure.scheme == "tpi" and not self.pressure.allow_unstable:
+            self._check_tpi_stability()
         return self
+
+    def _check_tpi_stability(self) -> None:
+        """The measured bounds of Eq. (38)-(39): alpha <= 0.75 and G <= 1.15 (1 - alpha)."""
+        force = "set pressure.allow_unstable = true to force"
+        alpha = self.pressure.alpha
+        if alpha > TPI_ALPHA_MAX:
+            raise _Rule("pressure.alpha", alpha,
+                        f"TPI is unstable for alpha above {TPI_ALPHA_MAX} at every R measured "
+                        f"(bench/stability.py; the paper: above 0.75 at R = 98); {force}")
+        dt = tpi_dt(self)
+        gain, limit = tpi_gain(self, dt), tpi_gain_limit(alpha)
+        if gain > limit:
+            key, value = ("time.dt", dt) if self.time.dt is not None else \
+                ("pressure.R", self.pressure.R)
+            raise _Rule(key, value,
+                        f"TPI gain G = dt gamma_l / (rho k) = {gain:.3g} at dt = {dt:.3e} s "
+                        f"is above its stability bound 1.15 (1 - alpha) = {limit:.3g} "
+                        f"(bench/tpi_gravity.py): dt <= {dt * limit / gain:.3e} s; {force}")
 
     @property
     def h(self) -> float:
@@ -347,6 +373,33 @@ def undrained_dt_limit(scene: Scene) -> float:
     rho = (1 - m.porosity) * m.rho_s + m.porosity * m.rho_l
     c_u = math.sqrt((lam + 2 * shear + m.K_l / m.porosity) / rho)
     return scene.time.cfl_solid * scene.h / c_u
+
+
+TPI_ALPHA_MAX = 0.75
+
+
+def tpi_dt(scene: Scene) -> float:
+    """The TPI step: time.dt, or R times Eq. (42) capped by the solid limit Eq. (41)."""
+    if scene.time.dt is not None:
+        return scene.time.dt
+    return min(solid_dt_limit(scene), scene.pressure.R * fluid_dt_limit(scene))
+
+
+def tpi_gain(scene: Scene, dt: float) -> float:
+    """G = dt gamma_l / (rho k): Eq. (38) has no storage, so p answers div v at once with
+    the gain gamma_l / sum_j A_ij (~ h^2 / k) and grad p feeds back into v, an explicit
+    bulk viscosity whose step limit is rho k / gamma_l, independent of h (README,
+    "Stability of TPI under gravity"). rho: the mixture density; k: the initial one."""
+    m = scene.material
+    rho = (1 - m.porosity) * m.rho_s + m.porosity * m.rho_l
+    return dt * m.rho_l * m.g_ref / (rho * m.k)
+
+
+def tpi_gain_limit(alpha: float) -> float:
+    """The largest stable G: 1.15 (1 - alpha), fitted to the map of bench/tpi_gravity.py
+    (alpha 0 to 0.7, G 0.2 to 1.2); the loaded column without gravity stays inside it
+    (README)."""
+    return 1.15 * (1.0 - alpha)
 
 
 def fluid_dt_limit(scene: Scene) -> float:

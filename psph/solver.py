@@ -35,13 +35,14 @@ from psph.kernels.update import (
     SCHEME_TPI,
     advance,
     kick,
+    porosity_follows_stress_filter,
 )
 from psph.particles import ParticleStore
 from psph.pcg import PCGWork, pcg
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
-from psph.scene import Scene, fluid_dt_limit, solid_dt_limit, undrained_dt_limit
+from psph.scene import Scene, fluid_dt_limit, solid_dt_limit, tpi_dt, undrained_dt_limit
 from psph.scenes.geometry import inside_polygon
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
@@ -94,7 +95,7 @@ def time_stepping(scene: Scene) -> TimeStepping:
         elif scheme == SCHEME_PROJECTION:
             dt_main = dt_s  # the solve carries the fluid and the undrained wave
         else:
-            dt_main = min(dt_s, scene.pressure.R * dt_l)
+            dt_main = tpi_dt(scene)
     if scene.time.dt is not None:
         dt_main = scene.time.dt
     return TimeStepping(dt_main, dt_exp, scheme, scene.pressure.explicit_until, limits)
@@ -164,6 +165,7 @@ class Simulation:
         self.astress = np.zeros((1, 3))
         self.w_dx = w_cubic(scene.particles.dx, self.h)
         self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
+        self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
@@ -285,15 +287,25 @@ class Simulation:
         st = self.store
         if self.scratch_moments.shape[0] < st.cap:
             self.scratch_moments = np.zeros((st.cap, 18))
+            self.scratch_trace = np.zeros(st.cap)
         mom = self.scratch_moments
         shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
                          st.drained_from, self.t, self.cell_start, self.order, self.ncell,
                          self.h, mom)
-        if self.scene.stabilisation.shepard_stress:
-            stress_filter = mls_stress if self.scene.stabilisation.stress_filter == "mls" \
-                else shepard_stress
+        stab = self.scene.stabilisation
+        if stab.shepard_stress:
+            stress_filter = mls_stress if stab.stress_filter == "mls" else shepard_stress
+            if stab.stress_filter_porosity:
+                trace = self.scratch_trace[:st.n_owned]
+                np.sum(st.stress[:st.n_owned, :3], axis=1, out=trace)
             stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
                           self.order, self.ncell, self.h, mom)
+            if stab.stress_filter_porosity:
+                s = self.soil
+                porosity_follows_stress_filter(
+                    st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
+                    st.perm, s.rho_s, s.rho_l, self.scene.material.k,
+                    self.scene.material.C_k, 3.0 * s.lam + 2.0 * s.shear)
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()

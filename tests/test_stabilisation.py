@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
-from psph.kernels.update import tpi_pressure
+from psph.kernels.update import porosity_follows_stress_filter, tpi_pressure
 from tests.helpers import cell_lists, jittered_lattice
 
 
@@ -168,3 +168,42 @@ def test_mls_stress_removes_the_odd_even_mode():
     inner = _interior(x, dx, n, 3)
     mode = (got[inner, 1] - (-5e4)) * sign[inner]
     assert np.abs(mode).max() < 0.2 * 1e4
+
+
+def _filter_with_porosity(x, stress, poro, bulk3, h):
+    """The slopes' Shepard step on sigma' and n: `mls_stress`, then the porosity moved by
+    the elastic strain the filter took out of the stress. Returns (stress, n, volume)."""
+    n = len(x)
+    out, n_new = stress.copy(), poro.copy()
+    trace = out[:, :3].sum(axis=1)
+    cell_start, order, ncell = cell_lists(x, h)
+    mls_stress(n, n, x, out, np.full(n, 1e-4), cell_start, order, ncell, h, np.zeros((n, 18)))
+    vol = np.full(n, 1e-4)
+    porosity_follows_stress_filter(n, trace, out, n_new, np.full(n, 0.4), vol, np.full(n, 1e-4),
+                                   np.zeros(n), np.zeros(n), 2650.0, 1000.0, 5e-8, 0.0, bulk3)
+    return out, n_new, vol
+
+
+def test_stress_filter_moves_the_porosity_with_the_strain_it_erases():
+    """One corner particle compacted elastically by delta (tr sigma' down by 3K delta, n
+    down by (1 - n) delta, as Eq. 11 and Eq. 24 move them together). The MLS filter pulls
+    its stress back toward its neighbours'; the porosity must follow, or the particle keeps
+    a compaction no stress resists (issue 13: n 0.40 -> 0.021 at a debris front). After
+    the filter, n - n0 is the elastic strain tr sigma' still carries, on every particle,
+    and a uniform state is left as it is."""
+    dx, n_side, bulk3, delta = 0.01, 12, 3.0 * 12.0e6, 1.0e-3
+    x = jittered_lattice(n_side, dx, 0.0)
+    s0 = np.array([-3e4, -5e4, -3e4, 2e3])
+    stress = np.tile(s0, (len(x), 1))
+    poro = np.full(len(x), 0.4)
+    out, n_new, vol = _filter_with_porosity(x, stress, poro, bulk3, 1.2 * dx)
+    assert np.abs(n_new - 0.4).max() < 1e-15
+    k = int(np.argmin(x[:, 0] + x[:, 1]))  # a corner: three quarters of its support cut
+    stress[k, :3] -= bulk3 * delta / 3.0
+    poro[k] -= 0.6 * delta
+    out, n_new, vol = _filter_with_porosity(x, stress, poro, bulk3, 1.2 * dx)
+    carried = 0.6 * (out[:, :3].sum(axis=1) - s0[:3].sum()) / bulk3
+    assert carried[k] < -0.1 * delta  # the filter kept part of the spike ...
+    assert carried[k] > -0.9 * delta  # ... and spread the rest
+    assert np.allclose(n_new - 0.4, carried, rtol=0, atol=2e-3 * delta)
+    assert np.allclose(vol, 1e-4 * 0.6 / (1.0 - n_new), rtol=1e-14)  # solid volume kept

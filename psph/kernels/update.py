@@ -59,6 +59,40 @@ def _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1, 
     v[i, 1] += dt * a1
 
 
+@nb.njit(cache=True, inline="always")
+def set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, rho_s, rho_l, k_sat, c_k):
+    """Porosity n_new for particle i and what follows from it: the volume with the solid
+    mass kept (incompressible grains, Eq. 8), the mixture density and, where c_k > 0, the
+    hydraulic conductivity from the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4)."""
+    poro[i] = n_new
+    vol[i] = vol0[i] * (1.0 - poro0[i]) / (1.0 - n_new)
+    rho[i] = (1.0 - n_new) * rho_s + n_new * rho_l
+    if c_k > 0.0:
+        e0 = poro0[i] / (1.0 - poro0[i])
+        perm[i] = k_sat * math.exp((n_new / (1.0 - n_new) - e0) / c_k)
+
+
+@nb.njit(cache=True)
+def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, vol, vol0,
+                                   rho, perm, rho_s, rho_l, k_sat, c_k, bulk3):
+    """Move the porosity with the volumetric strain that the stress filter took out of (or
+    put into) the effective stress, so that both keep carrying the same strain.
+
+    The elastic update changes tr(sigma') by 3K div v per unit time (Eq. 11, plane strain)
+    while Eq. (24) changes n by (1 - n) div v; a filter that replaces sigma' by its
+    neighbours' fit (`mls_stress`, `shepard_stress`) changes tr(sigma') by d_tr without a
+    strain, which Eq. (24) never sees. Left so, a particle whose div v is biased (a
+    debris-front surface particle with 9-11 neighbours, p held at 0 by ponding) compacts in
+    n while the filter keeps erasing the stress that would resist it: n 0.40 -> 0.021 in
+    27 s (issue 13, README). Here n += (1 - n) d_tr / (3K), the elastic strain of d_tr.
+    bulk3 = 3K = 3 lambda + 2 mu; trace_before: tr(sigma') before the filter."""
+    for i in range(n_owned):
+        d_tr = stress[i, 0] + stress[i, 1] + stress[i, 2] - trace_before[i]
+        n_i = poro[i]
+        set_porosity(i, n_i + (1.0 - n_i) * d_tr / bulk3, poro, poro0, vol, vol0, rho, perm,
+                     rho_s, rho_l, k_sat, c_k)
+
+
 @nb.njit(cache=True, error_model="numpy")
 def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
          damping, dt):
@@ -187,13 +221,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 # Eq. (24) alone lets a free-surface particle (p imposed, so no pressure
                 # feedback) drift to n <= 0, where K_l / n of Eq. (25) changes sign
                 n_new = n_min
-            poro[i] = n_new
-            vol[i] = vol0[i] * (1.0 - poro0[i]) / (1.0 - n_new)
-            rho[i] = (1.0 - n_new) * rho_s + n_new * rho_l
-            if c_k > 0.0:
-                # permeability from the void ratio, Eq. (4)
-                e0 = poro0[i] / (1.0 - poro0[i])
-                perm[i] = k_sat * math.exp((n_new / (1.0 - n_new) - e0) / c_k)
+            set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, rho_s, rho_l, k_sat,
+                         c_k)
 
         if not kicked:
             _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
