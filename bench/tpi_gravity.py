@@ -31,6 +31,7 @@ def run(alpha: float, k: float, dt: float, end: float) -> tuple[bool, int]:
         [sys.executable, "-m", "psph", "run", "geostatic_column", "--quiet",
          "--out", str(OUT / "tpi_gravity_run"), "--set", "pressure.scheme='tpi'",
          "--set", f"pressure.alpha={alpha}", "--set", f"material.k={k}",
+         "--set", "pressure.allow_unstable=true",
          "--set", f"time.dt={dt!r}", "--set", f"time.end={end}",
          "--set", "checkpoint.at_end=false", "--set", f"output.interval={end}"],
         capture_output=True, text=True, cwd=ROOT)

@@ -58,6 +58,15 @@ CASES = [
      ["material.porosity", "0.4", "must be above material.porosity_min = 0.6"]),
     (["--set", 'time.integrator="leapfrog"'], ["time.integrator", "leapfrog", "symplectic"]),
     (["--set", "pressure.ponding=1"], ["pressure.ponding", "1"]),
+    (["--set", "pressure.alpha=0.8"], ["pressure.alpha", "0.8", "TPI is unstable", "0.75"]),
+    # a new user's column (issue 14): k = 5e-5, the TPI step at the solid cap, G = 1.47.
+    # With alpha = 0.7, the symplectic step and pressure.allow_unstable it ran into exit 3
+    # (n > 1) 2 ms after the drained switch (README, "Stability of TPI under gravity")
+    (["--set", "material.k=5e-5", "--set", "time.dt=1.2e-5"],
+     ["time.dt", "1.2e-05", "TPI gain G", "1.47", "1.15 (1 - alpha) = 0.575",
+      "dt <= 4.689e-06 s"]),
+    (["--set", "material.k=5e-5", "--set", "time.dt=1.2e-5", "--set", "pressure.R=17.7",
+      "--set", "pressure.alpha=0.7"], ["time.dt", "TPI gain G", "0.345"]),
 ]
 
 
@@ -72,6 +81,16 @@ def test_bad_value_exit_2_one_line_nothing_written(tmp_path, args, words):
         assert w in lines[0], (w, lines[0])
     assert "Traceback" not in r.stderr
     assert not out.exists()
+
+
+def test_tpi_bound_can_be_overridden_explicitly():
+    """The TPI bound is a measured one: a scene may step past it on purpose (the
+    stability benches do) with pressure.allow_unstable."""
+    from psph.scene import load_scene, tpi_gain, tpi_gain_limit
+
+    over = ["material.k=5e-5", "time.dt=1.2e-5", "pressure.allow_unstable=true"]
+    scene = load_scene("terzaghi", over)
+    assert tpi_gain(scene, scene.time.dt) > tpi_gain_limit(scene.pressure.alpha)
 
 
 def test_missing_file(tmp_path):

@@ -1,12 +1,16 @@
 """Terzaghi's 1D consolidation with a compressible pore fluid (Section 4.1).
 
 Undrained loading (all sides impervious) builds p0 = q (K_l/n) / (K_l/n + M), M the
-constrained modulus E(1-nu)/((1+nu)(1-2nu)). Once the top is drained at t_d, the excess
+constrained modulus E(1-nu)/((1+nu)(1-2nu)). Once the column is drained at t_d, the excess
 pressure obeys dp/dt = c_v d2p/dz2 with c_v = k / (gamma_l (n/K_l + 1/M)) (mass balance
-Eq. 9 with Eq. 5, quasi-static), p = 0 at the top and no flux at the bottom:
+Eq. 9 with Eq. 5, quasi-static), p = 0 on the drained face(s) and no flux on the others:
 
-  p(z, t) = p0 sum_m 2/M_m sin(M_m z/H) exp(-M_m^2 T_v),  M_m = (2m+1) pi/2,
-  T_v = c_v (t - t_d) / H^2, z the depth below the top.
+  p(z, t) = p0 sum_m 2/M_m sin(M_m z/H_d) exp(-M_m^2 T_v),  M_m = (2m+1) pi/2,
+  T_v = c_v (t - t_d) / H_d^2,
+
+with z the distance from the drained face and H_d the drainage length: H for a column
+drained at the top (or at the bottom only), H/2 for one drained at both ends (the series
+is symmetric about z = H_d, so z is then the depth below the top).
 
 Settlement of the top: s = (q H - int_0^H p dz) / M.
 """
@@ -27,6 +31,12 @@ class Terzaghi:
     conductivity: float  # k (m/s)
     gamma_l: float  # rho_l g (N/m^3)
     t_drain: float  # s
+    drainage: str = "top"  # the drained end(s): "top", "bottom" or "both"
+
+    @property
+    def drainage_length(self) -> float:
+        """H_d (m): the longest distance pore water travels to a drained face."""
+        return 0.5 * self.height if self.drainage == "both" else self.height
 
     @property
     def p0(self) -> float:
@@ -41,14 +51,17 @@ class Terzaghi:
             self.gamma_l * (self.porosity / self.bulk_water + 1.0 / self.modulus))
 
     def time_of(self, tv: float) -> float:
-        return self.t_drain + tv * self.height**2 / self.cv
+        return self.t_drain + tv * self.drainage_length**2 / self.cv
 
     def tv_of(self, t):
-        return np.maximum(np.asarray(t, float) - self.t_drain, 0.0) * self.cv / self.height**2
+        return (np.maximum(np.asarray(t, float) - self.t_drain, 0.0) * self.cv
+                / self.drainage_length**2)
 
     def pressure(self, depth, t, terms: int = 400) -> np.ndarray:
-        """Excess pore pressure (Pa) at depth below the drained top, at time t >= t_d."""
-        z = np.asarray(depth, float) / self.height
+        """Excess pore pressure (Pa) at a depth below the top, at time t >= t_d."""
+        depth = np.asarray(depth, float)
+        z = (self.height - depth if self.drainage == "bottom" else depth) \
+            / self.drainage_length
         tv = float(self.tv_of(t))
         if tv <= 0.0:
             return np.full_like(z, self.p0)
@@ -58,7 +71,9 @@ class Terzaghi:
 
     def settlement(self, t, terms: int = 4000) -> np.ndarray:
         """Downward displacement of the top (m) for t >= t_d (undrained part included).
-        The series of the mean pressure converges as 1/terms (relative error ~ 5e-5)."""
+        The series of the mean pressure converges as 1/terms (relative error ~ 5e-5); the
+        mean over the drainage length is the column's (symmetric when drained at both
+        ends)."""
         tv = np.atleast_1d(self.tv_of(t))
         m = (2 * np.arange(terms) + 1) * math.pi / 2
         mean_p = self.p0 * (np.exp(-np.outer(tv, m**2)) @ (2 / m**2))  # (1/H) int p dz
@@ -66,7 +81,8 @@ class Terzaghi:
 
 
 def from_scene(scene) -> Terzaghi:
-    """The column of a scene: drained top, load on the top, height = domain height."""
+    """The column of a scene: load on the top, height = the blocks' height, drained at the
+    top, the bottom or both (the sides with flow = "drained"; both from the same time)."""
     m = scene.material
     E, nu = m.E, m.nu
     modulus = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
@@ -76,7 +92,14 @@ def from_scene(scene) -> Terzaghi:
     top = scene.boundaries.top
     blocks = scene.particles.blocks
     height = max(b.max[1] for b in blocks) - min(b.min[1] for b in blocks)
-    t_drain = top.drained_from if top.flow == "drained" else math.inf
+    bottom = scene.boundaries.bottom
+    ends = {name: side.drained_from for name, side in (("top", top), ("bottom", bottom))
+            if side.flow == "drained"}
+    if len(ends) == 2 and ends["top"] != ends["bottom"]:
+        raise ValueError("terzaghi reference: top and bottom are drained from different "
+                         f"times ({ends['top']} s, {ends['bottom']} s)")
+    drainage = "both" if len(ends) == 2 else next(iter(ends), "top")
+    t_drain = min(ends.values(), default=math.inf)
     return Terzaghi(height=height, load=load.pressure, modulus=modulus, porosity=m.porosity,
                     bulk_water=m.K_l, conductivity=m.k, gamma_l=m.rho_l * m.g_ref,
-                    t_drain=t_drain)
+                    t_drain=t_drain, drainage=drainage)
