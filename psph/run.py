@@ -12,7 +12,7 @@ from psph.decomposition.slabs import Slabs, slab_cuts
 from psph.errors import EARLY_STOP_SIGNALS, Interrupted
 from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
-from psph.kernels.update import SCHEME_PROJECTION
+from psph.kernels.update import SCHEME_NONE, SCHEME_PROJECTION
 from psph.physics.initial import initial_particles
 from psph.scene import Scene, check_restart_scene, to_toml
 from psph.solver import Simulation
@@ -304,6 +304,9 @@ def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
     if sim.stepping.scheme_main == SCHEME_PROJECTION:
         row["cg_iterations"] = sim.solve["iterations"]
         row["cg_residual"] = sim.solve["residual"]
+    elif sim.stepping.scheme_main != SCHEME_NONE:
+        # the same measure at the explicit / TPI pressure (0 before the first step)
+        row["mass_balance_residual"] = sim.mass_balance_residual() if sim.step > 0 else 0.0
     for k, name in enumerate(probes):
         row[f"p_{name}"] = tot[3 + 3 * k]
         row[f"ux_{name}"] = tot[4 + 3 * k]

@@ -184,7 +184,9 @@ class Simulation:
         # free-surface pressure condition: 0 none, 1 ponding p <= 0, 2 drained p = 0
         self.ponding = {False: 0, True: 1, "drained": 2}[scene.pressure.ponding]
         # pairs of the last sweep, reused by the symplectic velocity sweep
-        n_pairs0 = 16 * self.store.cap if self.symplectic else 0
+        # (and by the mass-balance residual of the explicit and TPI pressure)
+        self.record_pairs = self.symplectic or self.coupled
+        n_pairs0 = 16 * self.store.cap if self.record_pairs else 0
         self.pairs = np.zeros((n_pairs0, 2), np.int64)
         self.pair_g = np.zeros((n_pairs0, 2))
         self.n_pairs = 0
@@ -331,7 +333,7 @@ class Simulation:
                           sb.av_alpha, sb.av_beta,
                           self.av_sound_speed, rl * self.body[0], rl * self.body[1],
                           self.coupled, self.acc_term, self.sums, self.astress, as_n,
-                          self.w_dx, self.symplectic, self.pairs, self.pair_g)
+                          self.w_dx, self.record_pairs, self.pairs, self.pair_g)
             if n >= 0:
                 self.n_pairs = n
                 return
@@ -382,6 +384,39 @@ class Simulation:
         if "w" not in a or a["w"].shape[0] < n_pairs:
             a["w"] = np.zeros(max(n_pairs, self.pairs.shape[0]))
         return a
+
+    def mass_balance_residual(self) -> float:
+        """How far this step's pressure is from the solve of the projection: the relative
+        residual ||b - S dp|| / ||b|| of its linear system (`_project`, Eq. 29 with the
+        storage n / K_l, the Darcy flux and the velocity correction) at dp = p^(n+1) - p^n
+        of the explicit Eq. (25) or TPI Eq. (38) update, with the sums and pairs of the
+        step's sweep and the positions after it. Imposed (drained) rows take their
+        imposed increment and add nothing. Collective; the same bits on any rank count."""
+        st = self.store
+        s = self.soil
+        n, npairs = st.n_owned, self.n_pairs
+        a = self._projection_arrays(st.cap, npairs)
+        w, dp, imposed, fixed = a["w"], a["dp"], a["imposed"], a["fixed"]
+        pair_weights(npairs, self.pairs, self.pair_g, st.x, st.perm, st.rho,
+                     1.0 / s.gamma_l, self.dt, w)
+        projection_rhs(n, self.sums, st.p_prev, st.perm, st.vol, st.poro, s.rho_l,
+                       self.body[0], self.body[1], s.gamma_l, s.K_l, self.dt, a["storage"],
+                       a["rhs"])
+        imposed_increments(n, self.sums, st.drained_from, self.t - self.dt,
+                           self.ponding == 2, st.p_prev, imposed)
+        self._refresh_rows(imposed)
+        nt = st.n_total
+        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
+        fixed_rhs(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, imposed[:, 1],
+                  a["rhs"])
+        d = dp[:, 0]
+        np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
+        self._refresh_rows(dp)
+        res = a["diag"]  # scratch: S dp, then the residual
+        apply_operator(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, d, res)
+        np.subtract(a["rhs"][:n], res[:n], out=res[:n])
+        norm_b = self._dot(a["rhs"], a["rhs"])
+        return math.sqrt(self._dot(res, res) / norm_b) if norm_b > 0.0 else 0.0
 
     def _refresh_rows(self, field: np.ndarray) -> None:
         """Halo rows from their owners, then wall ghosts from the rows they mirror."""
