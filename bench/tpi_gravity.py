@@ -10,6 +10,11 @@ numerical failure.
 
     python bench/tpi_gravity.py            # table, bench/out/tpi_gravity.json and .png
     python bench/tpi_gravity.py --plot-only
+    python bench/tpi_gravity.py --no-gravity   # the loaded Terzaghi column instead
+
+`--no-gravity`: the `terzaghi` column (dx = 0.01, no gravity) loaded with 50 kPa through its
+explicit stage, then TPI from the drained switch (0.01 s) to 0.05 s, symplectic step; G set
+through k at dt = 9.786e-6 s (below the solid cap); writes tpi_nogravity.json / .png.
 """
 
 import argparse
@@ -19,6 +24,8 @@ import sys
 from datetime import date
 from pathlib import Path
 
+from psph.scene import tpi_gain_limit
+
 OUT = Path(__file__).parent / "out"
 ROOT = Path(__file__).parent.parent
 ALPHAS = (0.0, 0.3, 0.5, 0.7)
@@ -26,14 +33,23 @@ GAINS = (0.2, 0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.8, 0.9, 1.0, 1.1, 1.2)
 GAMMA, RHO = 9810.0, 0.65 * 2650.0 + 0.35 * 1000.0
 
 
-def run(alpha: float, k: float, dt: float, end: float) -> tuple[bool, int]:
+NG_DT, NG_RHO = 9.786e-6, 0.6 * 2000.0 + 0.4 * 1000.0  # the terzaghi column's soil
+NG_GAINS = (0.2, 0.3, 0.45, 0.6, 0.9, 1.2, 1.6, 2.4, 3.6)
+
+
+def run(alpha: float, k: float, dt: float, end: float, gravity: bool = True) -> tuple[bool, int]:
+    if gravity:
+        scene = ["geostatic_column", "--set", "pressure.scheme='tpi'",
+                 "--set", "checkpoint.at_end=false", "--set", f"output.interval={end}"]
+    else:
+        scene = ["terzaghi", "--set", "loads.0.pressure=5e4", "--set", "verification.tv=[]",
+                 "--set", "time.integrator='symplectic'", "--set", "output.interval=0.0"]
     r = subprocess.run(
-        [sys.executable, "-m", "psph", "run", "geostatic_column", "--quiet",
-         "--out", str(OUT / "tpi_gravity_run"), "--set", "pressure.scheme='tpi'",
+        [sys.executable, "-m", "psph", "run", *scene, "--quiet",
+         "--out", str(OUT / "tpi_gravity_run"),
          "--set", f"pressure.alpha={alpha}", "--set", f"material.k={k}",
          "--set", "pressure.allow_unstable=true",
-         "--set", f"time.dt={dt!r}", "--set", f"time.end={end}",
-         "--set", "checkpoint.at_end=false", "--set", f"output.interval={end}"],
+         "--set", f"time.dt={dt!r}", "--set", f"time.end={end}"],
         capture_output=True, text=True, cwd=ROOT)
     if r.returncode not in (0, 3):
         raise RuntimeError(r.stderr)
@@ -60,13 +76,35 @@ def main(end: float, k: float) -> None:
     plot(report)
 
 
+def main_no_gravity(end: float) -> None:
+    rows = []
+    for alpha in ALPHAS:
+        for g in NG_GAINS:
+            k = NG_DT * GAMMA / (g * NG_RHO)
+            ok, step = run(alpha, k, NG_DT, end, gravity=False)
+            rows.append({"alpha": alpha, "gain": g, "dt": NG_DT, "k": k, "stable": ok,
+                         "failed_at_step": step})
+            print(f"alpha {alpha:.1f}  G {g:.2f}  k {k:.3g}  "
+                  f"{'stable' if ok else f'failed at step {step}'}", flush=True)
+    report = {"date": str(date.today()), "end_s": end, "rows": rows, "gravity": False}
+    OUT.mkdir(exist_ok=True)
+    (OUT / "tpi_nogravity.json").write_text(json.dumps(report, indent=2) + "\n")
+    table(report)
+    plot(report)
+
+
 def table(report: dict) -> None:
-    print(f"\nTPI under gravity, geostatic_column to {report['end_s']} s, {report['date']}")
-    print("alpha | " + " ".join(f"{g:<5}" for g in GAINS) + "   (G)")
+    gravity = report.get("gravity", True)
+    gains = GAINS if gravity else NG_GAINS
+    name = "tpi_gravity" if gravity else "tpi_nogravity"
+    what = "TPI under gravity, geostatic_column" if gravity else \
+        "TPI without gravity, loaded terzaghi column"
+    print(f"\n{what} to {report['end_s']} s, {report['date']}")
+    print("alpha | " + " ".join(f"{g:<5}" for g in gains) + "   (G)")
     for a in ALPHAS:
         cells = [r for r in report["rows"] if r["alpha"] == a]
         print(f"{a:5.1f} | " + " ".join(f"{'ok' if r['stable'] else 'x':5s}" for r in cells))
-    print(f"wrote {OUT / 'tpi_gravity.json'}")
+    print(f"wrote {OUT / (name + '.json')}")
 
 
 def plot(report: dict) -> None:
@@ -81,16 +119,22 @@ def plot(report: dict) -> None:
                 color="C2" if r["stable"] else "C3", ms=8)
     ax.plot([], [], "o", color="C2", label="stable")
     ax.plot([], [], "x", color="C3", label="blows up")
-    ax.axvline(0.47, ls=":", c="grey", label="paper's collapse (G = 0.47)")
-    a = [0.0, 0.75]
-    ax.plot([1.15 * (1 - x) for x in a], a, "k--", lw=1, label=r"fit G = 1.15 (1 - $\alpha$)")
+    gravity = report.get("gravity", True)
+    if gravity:
+        ax.axvline(0.47, ls=":", c="grey", label="paper's collapse (G = 0.47)")
+    a = [0.01 * i for i in range(76)]
+    bound = [tpi_gain_limit(x, gravity) for x in a]
+    label = r"bound 1.15 (1 - $\alpha$)" if gravity else r"bound min(5 (1 - $\alpha)^2$, 3.6)"
+    ax.plot(bound, a, "k--", lw=1, label=label + " (validation)")
     ax.set_xlabel(r"G = $\Delta t\,\gamma_l / (\rho k)$")
     ax.set_ylabel(r"TPI $\alpha$")
-    ax.set_title("TPI with gravity: geostatic column", fontsize=10)
+    ax.set_title("TPI with gravity: geostatic column" if gravity else
+                 "TPI without gravity: loaded Terzaghi column", fontsize=10)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
-    fig.savefig(OUT / "tpi_gravity.png", dpi=110)
-    print(f"wrote {OUT / 'tpi_gravity.png'}")
+    name = "tpi_gravity" if gravity else "tpi_nogravity"
+    fig.savefig(OUT / f"{name}.png", dpi=110)
+    print(f"wrote {OUT / (name + '.png')}")
 
 
 if __name__ == "__main__":
@@ -98,10 +142,14 @@ if __name__ == "__main__":
     ap.add_argument("--end", type=float, default=0.3)
     ap.add_argument("--k", type=float, default=2e-4)
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--no-gravity", action="store_true")
     a = ap.parse_args()
     if a.plot_only:
-        rep = json.loads((OUT / "tpi_gravity.json").read_text())
+        rep = json.loads((OUT / ("tpi_nogravity.json" if a.no_gravity
+                                 else "tpi_gravity.json")).read_text())
         table(rep)
         plot(rep)
+    elif a.no_gravity:
+        main_no_gravity(0.05 if a.end == 0.3 else a.end)
     else:
         main(a.end, a.k)

@@ -336,14 +336,17 @@ class Scene(_Model):
                         f"TPI is unstable for alpha above {TPI_ALPHA_MAX} at every R measured "
                         f"(bench/stability.py; the paper: above 0.75 at R = 98); {force}")
         dt = tpi_dt(self)
-        gain, limit = tpi_gain(self, dt), tpi_gain_limit(alpha)
+        gravity = any(g != 0.0 for g in self.gravity)
+        gain, limit = tpi_gain(self, dt), tpi_gain_limit(alpha, gravity)
         if gain > limit:
             key, value = ("time.dt", dt) if self.time.dt is not None else \
                 ("pressure.R", self.pressure.R)
+            rule = "1.15 (1 - alpha)" if gravity else "min(5 (1 - alpha)^2, 3.6)"
+            bench = "bench/tpi_gravity.py" + ("" if gravity else " --no-gravity")
             raise _Rule(key, value,
                         f"TPI gain G = dt gamma_l / (rho k) = {gain:.3g} at dt = {dt:.3e} s "
-                        f"is above its stability bound 1.15 (1 - alpha) = {limit:.3g} "
-                        f"(bench/tpi_gravity.py): dt <= {dt * limit / gain:.3e} s; {force}")
+                        f"is above its stability bound {rule} = {limit:.3g} ({bench}): "
+                        f"dt <= {dt * limit / gain:.3e} s; {force}")
 
     @property
     def h(self) -> float:
@@ -395,11 +398,14 @@ def tpi_gain(scene: Scene, dt: float) -> float:
     return dt * m.rho_l * m.g_ref / (rho * m.k)
 
 
-def tpi_gain_limit(alpha: float) -> float:
-    """The largest stable G: 1.15 (1 - alpha), fitted to the map of bench/tpi_gravity.py
-    (alpha 0 to 0.7, G 0.2 to 1.2); the loaded column without gravity stays inside it
-    (README)."""
-    return 1.15 * (1.0 - alpha)
+def tpi_gain_limit(alpha: float, gravity: bool = True) -> float:
+    """The largest stable G, fitted to the maps of bench/tpi_gravity.py (alpha 0 to 0.7):
+    under gravity (the geostatic column at rest, G 0.2 to 1.2) 1.15 (1 - alpha); without
+    it (the loaded Terzaghi column through its drained switch, G 0.2 to 3.6)
+    5 (1 - alpha)^2, at most 3.6, the largest G measured (stable at alpha = 0)."""
+    if gravity:
+        return 1.15 * (1.0 - alpha)
+    return min(5.0 * (1.0 - alpha) ** 2, 3.6)
 
 
 def fluid_dt_limit(scene: Scene) -> float:
