@@ -328,8 +328,20 @@ class Scene(_Model):
         return self
 
     def _check_tpi_stability(self) -> None:
-        """The measured bounds of Eq. (38)-(39): alpha <= 0.75 and G <= 1.15 (1 - alpha)."""
+        """TPI needs somewhere to drain, and the measured bounds of Eq. (38)-(39): alpha <=
+        0.75 and G <= `tpi_gain_limit`."""
         force = "set pressure.allow_unstable = true to force"
+        drained = [getattr(self.boundaries, side).drained_from
+                   for side in ("left", "right", "bottom", "top")
+                   if getattr(self.boundaries, side).flow == "drained"]
+        if self.pressure.ponding != "drained" and \
+                self.pressure.explicit_until < min(drained, default=math.inf):
+            raise _Rule("pressure.explicit_until", self.pressure.explicit_until,
+                        "TPI while no side is drained: Eq. (38) has no storage term, so with "
+                        "every side impermeable it fixes p only up to a constant and the "
+                        "undrained loading blows up (the terzaghi column at 1.1 ms); run the "
+                        "explicit scheme until the first side drains "
+                        f"({min(drained, default=math.inf)} s); {force}")
         alpha = self.pressure.alpha
         if alpha > TPI_ALPHA_MAX:
             raise _Rule("pressure.alpha", alpha,
