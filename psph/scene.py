@@ -334,13 +334,13 @@ class Scene(_Model):
         drained = [getattr(self.boundaries, side).drained_from
                    for side in ("left", "right", "bottom", "top")
                    if getattr(self.boundaries, side).flow == "drained"]
-        if self.pressure.ponding != "drained" and \
+        if self.loads and self.pressure.ponding != "drained" and \
                 self.pressure.explicit_until < min(drained, default=math.inf):
             raise _Rule("pressure.explicit_until", self.pressure.explicit_until,
-                        "TPI while no side is drained: Eq. (38) has no storage term, so with "
-                        "every side impermeable it fixes p only up to a constant and the "
-                        "undrained loading blows up (the terzaghi column at 1.1 ms); run the "
-                        "explicit scheme until the first side drains "
+                        "TPI loading while no side is drained: Eq. (38) has no storage term, "
+                        "so with every side impermeable it fixes p only up to a constant and "
+                        "the undrained loading blows up (the terzaghi column at 1.1 ms); run "
+                        "the explicit scheme until the first side drains "
                         f"({min(drained, default=math.inf)} s); {force}")
         alpha = self.pressure.alpha
         if alpha > TPI_ALPHA_MAX:
@@ -394,10 +394,18 @@ TPI_ALPHA_MAX = 0.75
 
 
 def tpi_dt(scene: Scene) -> float:
-    """The TPI step: time.dt, or R times Eq. (42) capped by the solid limit Eq. (41)."""
+    """The TPI step: time.dt, or R times Eq. (42) capped by the solid limit Eq. (41) and by
+    TPI's own stability bound (`tpi_gain_dt_limit`)."""
     if scene.time.dt is not None:
         return scene.time.dt
-    return min(solid_dt_limit(scene), scene.pressure.R * fluid_dt_limit(scene))
+    return min(solid_dt_limit(scene), scene.pressure.R * fluid_dt_limit(scene),
+               tpi_gain_dt_limit(scene))
+
+
+def tpi_gain_dt_limit(scene: Scene) -> float:
+    """The largest dt with G = dt gamma_l / (rho k) within `tpi_gain_limit`."""
+    gravity = any(g != 0.0 for g in scene.gravity)
+    return tpi_gain_limit(scene.pressure.alpha, gravity) / tpi_gain(scene, 1.0)
 
 
 def tpi_gain(scene: Scene, dt: float) -> float:

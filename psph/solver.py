@@ -42,7 +42,14 @@ from psph.pcg import PCGWork, pcg
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
-from psph.scene import Scene, fluid_dt_limit, solid_dt_limit, tpi_dt, undrained_dt_limit
+from psph.scene import (
+    Scene,
+    fluid_dt_limit,
+    solid_dt_limit,
+    tpi_dt,
+    tpi_gain_dt_limit,
+    undrained_dt_limit,
+)
 from psph.scenes.geometry import inside_polygon
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
@@ -95,6 +102,7 @@ def time_stepping(scene: Scene) -> TimeStepping:
         elif scheme == SCHEME_PROJECTION:
             dt_main = dt_s  # the solve carries the fluid and the undrained wave
         else:
+            limits["dt_tpi_gain"] = tpi_gain_dt_limit(scene)
             dt_main = tpi_dt(scene)
     if scene.time.dt is not None:
         dt_main = scene.time.dt
