@@ -13,14 +13,13 @@ at the end, and the back scarp at the end. Writes bench/out/collapse_table.json.
 
 import json
 import sys
-import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).parent.parent
 sys.path.insert(0, str(ROOT))
 
 from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.scene import validate  # noqa: E402
+from psph.scene import run_scene  # noqa: E402
 from psph.verify.collapse import collapse_metrics  # noqa: E402
 from psph.verify.pressure import pressure_quality  # noqa: E402
 
@@ -29,7 +28,7 @@ CASES = {"-5": "collapse_saturated_psi-5", "0": "collapse_saturated_psi0",
 
 
 def case_row(run: Path) -> dict:
-    scene = validate(tomllib.loads((run / "scene.toml").read_text()), str(run / "scene.toml"))
+    scene = run_scene(run)
     dx = scene.particles.dx
     snaps = read_snapshots(run / "particles.h5")
     x0 = snaps[0]["x"]

@@ -21,7 +21,6 @@ Prints a table and writes bench/out/retrogressive_pressure.json.
 
 import json
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -30,7 +29,7 @@ ROOT = Path(__file__).parent.parent
 sys.path.insert(0, str(ROOT))
 
 from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.scene import validate  # noqa: E402
+from psph.scene import run_scene  # noqa: E402
 from psph.verify.collapse import slide_history  # noqa: E402
 from psph.verify.pressure import DEBRIS_DX, excess_pressure  # noqa: E402
 
@@ -39,7 +38,7 @@ BASE_ZONE_M = 4.0  # the basal shear zone starts in the bottom 4 m
 
 
 def run_checks(out: Path) -> dict:
-    scene = validate(tomllib.loads((out / "scene.toml").read_text()), str(out / "scene.toml"))
+    scene = run_scene(out)
     snaps = read_snapshots(out / "particles.h5")
     dx = scene.particles.dx
     slides = slide_history(snaps, dx)

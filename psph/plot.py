@@ -7,7 +7,6 @@ surface settlement against time beside the analytical settlement.
 
 import csv
 import json
-import tomllib
 from pathlib import Path
 
 import matplotlib
@@ -18,7 +17,7 @@ import numpy as np  # noqa: E402
 
 from psph.errors import SceneError  # noqa: E402
 from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.scene import validate  # noqa: E402
+from psph.scene import run_scene  # noqa: E402
 from psph.verify import terzaghi  # noqa: E402
 from psph.verify.pressure import excess_pressure  # noqa: E402
 
@@ -28,7 +27,7 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
     h5 = out / "particles.h5"
     if not h5.is_file():
         raise SceneError(f"plot {out}: no particles.h5 (is it a psph output directory?)")
-    scene = validate(tomllib.loads((out / "scene.toml").read_text()), str(out / "scene.toml"))
+    scene = run_scene(out)
     snaps = read_snapshots(h5)
     paths = [_field_picture(out, snaps[-1], field)]
     ref = scene.verification.reference

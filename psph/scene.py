@@ -438,6 +438,12 @@ def fluid_dt_limit(scene: Scene) -> float:
 # ---------------------------------------------------------------------------- loading
 
 
+def run_scene(out: Path) -> "Scene":
+    """The validated scene a run wrote to OUT/scene.toml (OSError, SceneError)."""
+    path = Path(out) / "scene.toml"
+    return validate(tomllib.loads(path.read_text()), str(path))
+
+
 def builtin_dir() -> Path:
     return Path(__file__).parent / "scenes"
 

@@ -21,7 +21,6 @@ are more than 0.01 below n_law.
 import argparse
 import math
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +55,7 @@ def porosity_deficit(snap: dict, n0: float, psi0_deg: float, s_f: float) -> dict
 def main(argv: list[str] | None = None) -> int:
     from psph.errors import SceneError
     from psph.io.snapshots import read_snapshots
-    from psph.scene import validate
+    from psph.scene import run_scene
 
     ap = argparse.ArgumentParser(prog="python -m psph.verify.porosity",
                                  description="porosity against the flow rule's bound")
@@ -66,8 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     status = 0
     for out in args.out:
         try:
-            scene = validate(tomllib.loads((out / "scene.toml").read_text()),
-                             str(out / "scene.toml"))
+            scene = run_scene(out)
             snaps = read_snapshots(out / "particles.h5")
         except (OSError, SceneError) as e:
             print(f"{out}: error: {e}", file=sys.stderr)

@@ -16,7 +16,6 @@ import argparse
 import json
 import math
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -248,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
     """`python -m psph.verify.pressure OUT [OUT ...] [--write]`: one line per run."""
     from psph.errors import SceneError
     from psph.io.snapshots import read_snapshots
-    from psph.scene import validate
+    from psph.scene import run_scene
 
     ap = argparse.ArgumentParser(prog="python -m psph.verify.pressure",
                                  description="pressure quality of psph runs (excess pore "
@@ -267,8 +266,7 @@ def main(argv: list[str] | None = None) -> int:
     status = 0
     for out in args.out:
         try:
-            scene = validate(tomllib.loads((out / "scene.toml").read_text()),
-                             str(out / "scene.toml"))
+            scene = run_scene(out)
             snaps = read_snapshots(out / "particles.h5")
             if args.at is not None:
                 snaps = [sn for sn in snaps if sn["time"] <= args.at * (1 + 1e-9)]
