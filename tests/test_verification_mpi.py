@@ -34,7 +34,10 @@ def test_strip_footing_loading_stage_matches_undrained_elastic(tmp_path_factory)
     out = shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
     scene = load_scene("strip_footing", ["time.end=0.1", "output.times=[]",
                                           "output.interval=0.0"])
-    err = run(scene, out / "strip", quiet=True)["errors"]
+    _check_strip_loading(run(scene, out / "strip", quiet=True)["errors"])
+
+
+def _check_strip_loading(err: dict) -> None:
     q = err["load_Pa"]
     a, b = err["probes"]["A"], err["probes"]["B"]
     for e in (a, b):
@@ -77,9 +80,4 @@ def test_strip_footing_loading_stage_with_the_projection(tmp_path_factory):
     out = shared_tmp(MPI.COMM_WORLD, tmp_path_factory)
     scene = _at_solid_cap("strip_footing", ["time.end=0.1", "output.times=[]",
                                              "output.interval=0.0"])
-    err = run(scene, out / "strip_projection", quiet=True)["errors"]
-    q = err["load_Pa"]
-    a, b = err["probes"]["A"], err["probes"]["B"]
-    for e in (a, b):
-        assert abs(e["p_at_load_end_Pa"] - e["undrained_reference_Pa"]) < 0.03 * q, e
-    assert b["p_at_load_end_Pa"] < a["p_at_load_end_Pa"]
+    _check_strip_loading(run(scene, out / "strip_projection", quiet=True)["errors"])
