@@ -9,7 +9,7 @@ that changes control flow comes from a collective or from values identical on al
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -42,15 +42,9 @@ from psph.pcg import PCGWork, pcg
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
-from psph.scene import (
-    Scene,
-    fluid_dt_limit,
-    solid_dt_limit,
-    tpi_dt,
-    tpi_gain_dt_limit,
-    undrained_dt_limit,
-)
+from psph.scene import Scene
 from psph.scenes.geometry import inside_polygon
+from psph.stepping import TimeStepping, time_stepping  # noqa: F401  (re-exported)
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
               "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
@@ -65,48 +59,6 @@ class Stage:
     every: int = 1  # run on steps that are multiples of this
     seconds: float = 0.0
     calls: int = 0
-
-
-@dataclass
-class TimeStepping:
-    """Time step of each phase (Eq. 40-42) and the scheme in force."""
-
-    dt_main: float
-    dt_explicit: float
-    scheme_main: int
-    explicit_until: float
-    limits: dict = field(default_factory=dict)
-
-    def at(self, t: float) -> tuple[float, int]:
-        if self.scheme_main == SCHEME_TPI and t < self.explicit_until:
-            return self.dt_explicit, SCHEME_EXPLICIT
-        return self.dt_main, self.scheme_main
-
-
-def time_stepping(scene: Scene) -> TimeStepping:
-    dt_s = solid_dt_limit(scene)
-    scheme = {"none": SCHEME_NONE, "explicit": SCHEME_EXPLICIT, "tpi": SCHEME_TPI,
-              "projection": SCHEME_PROJECTION}[scene.pressure.scheme]
-    limits = {"dt_solid_eq41": dt_s}
-    if scheme == SCHEME_NONE:
-        dt_main = dt_s
-        dt_exp = dt_s
-    else:
-        dt_l = fluid_dt_limit(scene)
-        dt_u = undrained_dt_limit(scene)
-        limits["dt_fluid_eq42"] = dt_l
-        limits["dt_undrained_eq41"] = dt_u
-        dt_exp = min(dt_s, dt_l, dt_u)
-        if scheme == SCHEME_EXPLICIT:
-            dt_main = dt_exp
-        elif scheme == SCHEME_PROJECTION:
-            dt_main = dt_s  # the solve carries the fluid and the undrained wave
-        else:
-            limits["dt_tpi_gain"] = tpi_gain_dt_limit(scene)
-            dt_main = tpi_dt(scene)
-    if scene.time.dt is not None:
-        dt_main = scene.time.dt
-    return TimeStepping(dt_main, dt_exp, scheme, scene.pressure.explicit_until, limits)
 
 
 class Simulation:
