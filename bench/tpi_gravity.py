@@ -12,6 +12,12 @@ numerical failure.
     python bench/tpi_gravity.py --plot-only
     python bench/tpi_gravity.py --no-gravity   # the loaded Terzaghi column instead
 
+`--projection`: the same geostatic column with `pressure.scheme = "projection"` (the
+symplectic step) at every dt of the map (k = 2e-4, G = 0.2 ... 1.2) and at the solid
+cap Eq. (41), 100,000 steps each at rest; a run passes if it ends without a numerical
+failure and its particles are at rest (max |v| over the last snapshot below
+`V_REST`); writes projection_gravity.json.
+
 `--no-gravity`: the `terzaghi` column (dx = 0.01, no gravity) loaded with 50 kPa through its
 explicit stage, then TPI from the drained switch (0.01 s) to 0.05 s, symplectic step; G set
 through k at dt = 9.786e-6 s (below the solid cap); writes tpi_nogravity.json / .png.
@@ -19,10 +25,13 @@ through k at dt = 9.786e-6 s (below the solid cap); writes tpi_nogravity.json / 
 
 import argparse
 import json
+import math
 import subprocess
 import sys
 from datetime import date
 from pathlib import Path
+
+import numpy as np
 
 from psph.scene import tpi_gain_limit
 
@@ -33,6 +42,9 @@ GAINS = (0.2, 0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.8, 0.9, 1.0, 1.1, 1.2)
 GAMMA, RHO = 9810.0, 0.65 * 2650.0 + 0.35 * 1000.0
 
 
+V_REST = 1e-4  # m/s: "at rest" for the projection rows (the K0 state's first settling
+# moves the column by a few micrometres)
+SOLID_CAP = 6.9e-5  # s, Eq. (41) for the geostatic column (dx = 0.05)
 NG_DT, NG_RHO = 9.786e-6, 0.6 * 2000.0 + 0.4 * 1000.0  # the terzaghi column's soil
 NG_GAINS = (0.2, 0.3, 0.45, 0.6, 0.9, 1.2, 1.6, 2.4, 3.6)
 
@@ -93,6 +105,44 @@ def main_no_gravity(end: float) -> None:
     plot(report)
 
 
+def main_projection(steps: int) -> None:
+    """The projection over the map's dt and the solid cap, `steps` steps at rest each."""
+    from psph.io.snapshots import read_snapshots
+
+    out = OUT / "projection_gravity_run"
+    rows = []
+    for g in GAINS + (SOLID_CAP * GAMMA / (RHO * 2e-4),):
+        dt = g * RHO * 2e-4 / GAMMA
+        end = steps * dt
+        r = subprocess.run(
+            [sys.executable, "-m", "psph", "run", "geostatic_column", "--quiet",
+             "--out", str(out), "--set", "pressure.scheme='projection'",
+             "--set", "time.integrator='symplectic'", "--set", "checkpoint.at_end=false",
+             "--set", f"output.interval={end}", "--set", f"time.dt={dt!r}",
+             "--set", f"time.end={end!r}", "--set", "pressure.tolerance=1e-9"],
+            capture_output=True, text=True, cwd=ROOT)
+        if r.returncode not in (0, 3):
+            raise RuntimeError(r.stderr)
+        vmax = math.inf
+        if r.returncode == 0:
+            last = read_snapshots(out / "particles.h5")[-1]
+            vmax = float(np.max(np.linalg.norm(last["v"], axis=1)))
+        summary = json.loads((out / "summary.json").read_text()) if r.returncode == 0 else {}
+        ok = r.returncode == 0 and vmax < V_REST
+        rows.append({"gain": g, "dt": dt, "k": 2e-4, "steps": summary.get("steps"),
+                     "stable": ok, "v_max_end": vmax,
+                     "cg_iterations_mean": summary.get("pressure_solve", {}).get(
+                         "iterations_mean")})
+        print(f"G {g:.2f}  dt {dt:.3e}  {summary.get('steps')} steps  "
+              f"max |v| {vmax:.2e} m/s  {'at rest' if ok else 'FAILED'}", flush=True)
+    report = {"date": str(date.today()), "steps": steps, "v_rest": V_REST, "rows": rows}
+    OUT.mkdir(exist_ok=True)
+    (OUT / "projection_gravity.json").write_text(json.dumps(report, indent=2) + "\n")
+    print(f"projection, geostatic column, {steps} steps: "
+          f"{sum(r['stable'] for r in rows)} of {len(rows)} at rest "
+          f"(max |v| < {V_REST} m/s); wrote {OUT / 'projection_gravity.json'}")
+
+
 def table(report: dict) -> None:
     gravity = report.get("gravity", True)
     gains = GAINS if gravity else NG_GAINS
@@ -143,8 +193,12 @@ if __name__ == "__main__":
     ap.add_argument("--k", type=float, default=2e-4)
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--no-gravity", action="store_true")
+    ap.add_argument("--projection", action="store_true")
+    ap.add_argument("--steps", type=int, default=100_000)
     a = ap.parse_args()
-    if a.plot_only:
+    if a.projection:
+        main_projection(a.steps)
+    elif a.plot_only:
         rep = json.loads((OUT / ("tpi_nogravity.json" if a.no_gravity
                                  else "tpi_gravity.json")).read_text())
         table(rep)

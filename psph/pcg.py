@@ -77,6 +77,8 @@ def pcg(apply: Callable[[np.ndarray, np.ndarray], None], diag: np.ndarray, rhs: 
             return PCGResult(it, res, True)
         np.divide(r[:n], diag[:n], out=z[:n])
         rz_new = dot(r, z)
+        if rz == 0.0:  # breakdown (a non-positive preconditioner): not converged
+            return PCGResult(it, res, False)
         beta = rz_new / rz
         rz = rz_new
         d[:n] *= beta

@@ -137,6 +137,9 @@ class Pressure(_Model):
     max_iterations: Annotated[int, Field(ge=1)] = 2000
     # TPI: run a Delta t or alpha beyond the measured stability bound (`tpi_gain_limit`)
     allow_unstable: bool = False
+    # where a drained side holds p = 0: "mirror" on its true surface (antisymmetric
+    # ghosts or images, psph/drainage.py), "layer" on its outer particle layer, dx/2 inside
+    drained_boundary: Literal["mirror", "layer"] = "mirror"
 
 
 class Time(_Model):
@@ -212,6 +215,11 @@ class Initial(_Model):
     # eta_d = equilibrate_damping (Eq. 43-44); then u = v = 0. 0: start from the K0 state
     equilibrate: Annotated[float, Field(ge=0.0)] = 0.0
     equilibrate_damping: Annotated[float, Field(gt=0.0)] = 0.1
+    # start from the undrained response to the (single, full-side, step) load of a
+    # laterally confined column: p0 = q / (1 + n M / K_l), sigma' = -(q - p0) along the
+    # load, nu / (1 - nu) of it across (psph/physics/initial.py), as GeoTaichi starts its
+    # Terzaghi column; the loading stage and its waves are then skipped
+    undrained_load: bool = False
 
 
 class Decomposition(_Model):
@@ -301,6 +309,8 @@ class Scene(_Model):
             key = "initial.k0" if self.initial.k0 is not None else "initial.water_table"
             raise _Rule(key, getattr(self.initial, key.split(".")[1]),
                         f"needs gravity along -y (gravity = {self.gravity})")
+        if self.initial.undrained_load:
+            self._check_undrained_load()
         for name, pt in self.output.probes.items():
             for d in range(2):
                 if not lo[d] <= pt[d] <= hi[d]:
@@ -326,6 +336,21 @@ class Scene(_Model):
         if self.pressure.scheme == "tpi" and not self.pressure.allow_unstable:
             self._check_tpi_stability()
         return self
+
+    def _check_undrained_load(self) -> None:
+        """`initial.undrained_load` is the oedometric state of one step load over a side."""
+        key = "initial.undrained_load"
+        if len(self.loads) != 1:
+            raise _Rule(key, True, f"needs exactly one [[loads]] (got {len(self.loads)})")
+        load = self.loads[0]
+        if load.history != "ramp" or load.ramp != 0.0 or load.range is not None:
+            raise _Rule(key, True, "needs a step load over the whole side (loads[0]: history "
+                        "= 'ramp', ramp = 0, no range)")
+        if any(self.gravity) or self.initial.k0 is not None or \
+                self.initial.water_table is not None:
+            raise _Rule(key, True, "needs gravity = [0, 0] and no initial.k0 or water_table")
+        if self.pressure.scheme == "none":
+            raise _Rule(key, True, "needs pore water (pressure.scheme is 'none')")
 
     def _check_tpi_stability(self) -> None:
         """TPI needs somewhere to drain, and the measured bounds of Eq. (38)-(39): alpha <=

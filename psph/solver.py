@@ -13,19 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psph.drainage import Drainage
 from psph.errors import NumericalError
 from psph.kernels.artificial_stress import artificial_stress
-from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, local_parts
 from psph.kernels.ghosts import make_ghosts, wall_contact
+from psph.kernels.images import image_sums
 from psph.kernels.interactions import NSUMS, pair_sums, velocity_gradient_sums
-from psph.kernels.laplacian import apply_operator, fixed_rhs, operator_diagonal, pair_weights
+from psph.kernels.laplacian import lattice_moment
 from psph.kernels.neighbours import bin_particles, grid_bounds
-from psph.kernels.projection import (
-    imposed_increments,
-    mirror_to_ghosts,
-    pressure_correction,
-    projection_rhs,
-)
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.spline import w_cubic
 from psph.kernels.update import (
@@ -38,10 +33,10 @@ from psph.kernels.update import (
     porosity_follows_stress_filter,
 )
 from psph.particles import ParticleStore
-from psph.pcg import PCGWork, pcg
-from psph.physics.initial import initial_particles
+from psph.physics.initial import initial_particles, soil_positions
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
+from psph.pressure_solve import PressureSolve
 from psph.scene import Scene
 from psph.scenes.geometry import inside_polygon
 from psph.stepping import TimeStepping, time_stepping  # noqa: F401  (re-exported)
@@ -103,11 +98,12 @@ class Simulation:
         # without a fixed wall they are the velocities themselves
         self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() else None
         self.ghost_src = np.zeros(0, np.int64)
-        self.solve = {"iterations": 0, "residual": 0.0, "iterations_total": 0,
-                      "iterations_max": 0, "not_converged": 0}
-        self._proj = {}
-        self._pcg_work = PCGWork()
-        self._dot_buf = np.zeros(EXPANSION_CAP)
+        self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
+        # the initial lattice, also on a restart (x - u of a checkpoint is not its bits)
+        x0 = soil_positions(scene) if state is not None else data["x"]
+        self.drainage = Drainage(scene, [side for side, _ in walls], x0)
+        self.pressure_solve = PressureSolve(self)
+        self.solve = self.pressure_solve.stats
 
         margin = 2.0 * self.h
         self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
@@ -124,6 +120,7 @@ class Simulation:
         self.sums = np.zeros((self.store.cap, NSUMS))
         self.astress = np.zeros((1, 3))
         self.w_dx = w_cubic(scene.particles.dx, self.h)
+        self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h)  # F~ of Eq. (23)
         self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
         self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
         self.load_value = np.zeros(max(len(scene.loads), 1))
@@ -171,6 +168,8 @@ class Simulation:
         if len(self.wall_axis):
             stages.append(Stage("ghosts", self._ghosts))
         stages.append(Stage("neighbours", self._neighbours))
+        if self.coupled and self.drainage.has_planes:
+            stages.append(Stage("drained_planes", self._drained_planes))
         m = self.scene.stabilisation.shepard_every
         if self.coupled and m > 0:
             stab = self.scene.stabilisation
@@ -217,11 +216,12 @@ class Simulation:
         while True:
             if self.ghost_src.shape[0] < st.cap:
                 self.ghost_src = np.zeros(st.cap, np.int64)
+                self.ghost_sign = np.ones(st.cap)
             ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids),
                              self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
-                             st.x, st.v, self.v_slip, st.stress, st.p, st.p_prev, st.poro,
-                             st.vol, st.rho, st.perm, st.acc, st.key, self.head_b,
-                             self.ghost_src)
+                             self.drainage.update_walls(self.t), st.x, st.v, self.v_slip,
+                             st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
+                             st.acc, st.key, self.head_b, self.ghost_src, self.ghost_sign)
             if ng >= 0:
                 st.n_ghost = ng
                 return
@@ -243,6 +243,10 @@ class Simulation:
         bin_particles(st.x, st.key, n, self.origin, self.cell_size, self.grid_lo, self.ncell,
                       self.cell_of, self.cell_start, self.fill, self.order)
 
+    def _drained_planes(self) -> None:
+        """The free drained sides' planes at this step (collective)."""
+        self.drainage.update_planes(self.t, self.store, self.slabs)
+
     def _shepard(self) -> None:
         """Eq. (46) on owned particles, then the halo and ghosts again so that every copy
         of a particle carries its filtered pressure (positions have not moved yet)."""
@@ -252,7 +256,8 @@ class Simulation:
             self.scratch_trace = np.zeros(st.cap)
         mom = self.scratch_moments
         shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
-                         st.drained_from, self.t, self.cell_start, self.order, self.ncell,
+                         st.drained_from, self.drainage.layer_clock(self.t), self.cell_start,
+                         self.order, self.ncell,
                          self.h, mom)
         stab = self.scene.stabilisation
         if stab.shepard_stress:
@@ -296,6 +301,15 @@ class Simulation:
                           self.w_dx, self.record_pairs, self.pairs, self.pair_g)
             if n >= 0:
                 self.n_pairs = n
+                if self.coupled and self.drainage.has_planes:
+                    image_sums(st.n_owned, n, self.pairs, st.x, st.p, st.p_prev, st.vol,
+                               st.perm, self.drainage.planes, self.h, alpha, rl * self.body[0],
+                               rl * self.body[1], self.sums)
+                if self.coupled:
+                    self.sums[:st.n_owned, 14:19] *= self.lattice_norm
+                # the stress divergence of Eq. (26) has the same lattice moment: a
+                # uniform stress under a surface load balanced m0 q, not q (README)
+                self.sums[:st.n_owned, 23:25] *= self.lattice_norm
                 return
             grow = 2 * self.pairs.shape[0]
             self.pairs = np.zeros((grow, 2), np.int64)
@@ -320,7 +334,8 @@ class Simulation:
         load_values(self.scene.loads, self.t, self.load_value)
         bad = advance(st.n_owned, self.sums, st.x, st.u, st.v, st.stress, st.p, st.p_prev,
                       st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
-                      st.drained_from, self.t, st.load_index, st.traction, self.load_value, self.dt,
+                      st.drained_from, self.drainage.layer_clock(self.t), st.load_index,
+                      st.traction, self.load_value, self.dt,
                       s.lam, s.shear, s.K_l, s.gamma_l, s.rho_l, s.rho_s, self.body[0],
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
@@ -335,116 +350,23 @@ class Simulation:
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
 
-    def _projection_arrays(self, cap: int, n_pairs: int) -> dict:
-        a = self._proj
-        if a.get("cap", 0) < cap:
-            a.update(cap=cap, storage=np.zeros(cap), rhs=np.zeros(cap), diag=np.zeros(cap),
-                     dp=np.zeros((cap, 1)), imposed=np.zeros((cap, 2)),
-                     fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)))
-        if "w" not in a or a["w"].shape[0] < n_pairs:
-            a["w"] = np.zeros(max(n_pairs, self.pairs.shape[0]))
-        return a
-
     def mass_balance_residual(self) -> float:
-        """How far this step's pressure is from the solve of the projection: the relative
-        residual ||b - S dp|| / ||b|| of its linear system (`_project`, Eq. 29 with the
-        storage n / K_l, the Darcy flux and the velocity correction) at dp = p^(n+1) - p^n
-        of the explicit Eq. (25) or TPI Eq. (38) update, with the sums and pairs of the
-        step's sweep and the positions after it. Imposed (drained) rows take their
-        imposed increment and add nothing. Collective; the same bits on any rank count."""
-        st = self.store
-        s = self.soil
-        n, npairs = st.n_owned, self.n_pairs
-        a = self._projection_arrays(st.cap, npairs)
-        w, dp, imposed, fixed = a["w"], a["dp"], a["imposed"], a["fixed"]
-        pair_weights(npairs, self.pairs, self.pair_g, st.x, st.perm, st.rho,
-                     1.0 / s.gamma_l, self.dt, w)
-        projection_rhs(n, self.sums, st.p_prev, st.perm, st.vol, st.poro, s.rho_l,
-                       self.body[0], self.body[1], s.gamma_l, s.K_l, self.dt, a["storage"],
-                       a["rhs"])
-        imposed_increments(n, self.sums, st.drained_from, self.t - self.dt,
-                           self.ponding == 2, st.p_prev, imposed)
-        self._refresh_rows(imposed)
-        nt = st.n_total
-        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
-        fixed_rhs(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, imposed[:, 1],
-                  a["rhs"])
-        d = dp[:, 0]
-        np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
-        self._refresh_rows(dp)
-        res = a["diag"]  # scratch: S dp, then the residual
-        apply_operator(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, d, res)
-        np.subtract(a["rhs"][:n], res[:n], out=res[:n])
-        norm_b = self._dot(a["rhs"], a["rhs"])
-        return math.sqrt(self._dot(res, res) / norm_b) if norm_b > 0.0 else 0.0
-
-    def _refresh_rows(self, field: np.ndarray) -> None:
-        """Halo rows from their owners, then wall ghosts from the rows they mirror."""
-        st = self.store
-        self.slabs.refresh_halo(field)
-        if st.n_ghost:
-            mirror_to_ghosts(st.n_real, st.n_total, self.ghost_src, field)
-
-    def _dot(self, a: np.ndarray, b: np.ndarray) -> float:
-        """Inner product over the owned rows, the same bits on any rank count."""
-        buf = self._dot_buf
-        m = dot_expansion(a, b, self.store.n_owned, buf)
-        return self.slabs.exact_sum(local_parts(buf, m))
+        """`PressureSolve.residual` of this step (collective)."""
+        return self.pressure_solve.residual()
 
     def _project(self) -> None:
-        """The pressure increment of the step from one solve of Eq. (29) (module
-        `psph.kernels.projection`), then the velocity correction and the velocity sums of
-        the corrected velocity. Collective (the solve's reductions and halo refreshes)."""
+        """The pressure increment of the step from one solve of Eq. (29) with its velocity
+        correction (`PressureSolve.project`), then the halo and ghost copies and the
+        velocity sums of the corrected velocity. Collective."""
+        self.pressure_solve.project()
         st = self.store
-        s = self.soil
-        n, npairs = st.n_owned, self.n_pairs
-        a = self._projection_arrays(st.cap, npairs)
-        w, dp, imposed, fixed = a["w"], a["dp"], a["imposed"], a["fixed"]
-        dt = self.dt
-        pair_weights(npairs, self.pairs, self.pair_g, st.x, st.perm, st.rho,
-                     1.0 / s.gamma_l, dt, w)
-        projection_rhs(n, self.sums, st.p, st.perm, st.vol, st.poro, s.rho_l, self.body[0],
-                       self.body[1], s.gamma_l, s.K_l, dt, a["storage"], a["rhs"])
-        imposed_increments(n, self.sums, st.drained_from, self.t, self.ponding == 2,
-                           st.p, imposed)
-        self._refresh_rows(imposed)
-        nt = st.n_total
-        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
-        value = imposed[:, 1]
-        fixed_rhs(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, value, a["rhs"])
-        operator_diagonal(n, npairs, self.pairs, w, st.vol, a["storage"], a["diag"])
-        # warm start: the last step's increment p^n - p^(n-1); imposed rows at their value
-        d = dp[:, 0]
-        np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
-        np.copyto(d[:n], value[:n], where=fixed[:n])
-        self._refresh_rows(dp)
-
-        def apply(q, out):
-            apply_operator(n, npairs, self.pairs, w, st.vol, a["storage"], fixed, q, out)
-
-        def refresh(q):
-            self._refresh_rows(q.reshape(-1, 1))
-
-        pc = self.scene.pressure
-        res = pcg(apply, a["diag"], a["rhs"], d, n, self._dot, refresh, pc.tolerance,
-                  pc.max_iterations, self._pcg_work)
-        sv = self.solve
-        sv["iterations"], sv["residual"] = res.iterations, res.residual
-        sv["iterations_total"] += res.iterations
-        sv["iterations_max"] = max(sv["iterations_max"], res.iterations)
-        sv["not_converged"] += not res.converged
-        self._refresh_rows(dp)
-        pressure_correction(n, npairs, self.pairs, self.pair_g, st.vol, st.rho, d, dt,
-                            a["dv"], st.v, st.acc)
-        st.p_prev[:n] = st.p[:n]
-        st.p[:n] += d[:n]
         self.slabs.refresh_halo(st.v)
         self.slabs.refresh_halo(st.p.reshape(-1, 1))
         self.slabs.refresh_halo(st.p_prev.reshape(-1, 1))
         if len(self.wall_axis):
             self._ghosts()
-        velocity_gradient_sums(st.n_owned, st.n_real, npairs, self.pairs, self.pair_g, st.v,
-                               self.v_slip, st.poro, st.vol, self.coupled, self.sums)
+        velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g,
+                               st.v, self.v_slip, st.poro, st.vol, self.coupled, self.sums)
 
     # ------------------------------------------------------------------ stepping
 

@@ -71,6 +71,9 @@ CASES = [
     # bench's column)
     (["--set", "pressure.explicit_until=0.0"],
      ["pressure.explicit_until", "0.0", "TPI loading while no side is drained", "(0.01 s)"]),
+    # the undrained start is the state of one step load (terzaghi ramps it over 0.01 s)
+    (["--set", "initial.undrained_load=true"],
+     ["initial.undrained_load", "True", "needs a step load over the whole side"]),
     # under gravity the bound is 1.15 (1 - alpha)
     (["--set", "gravity=[0.0, -9.81]", "--set", "material.k=1e-4", "--set", "time.dt=1e-5"],
      ["time.dt", "TPI gain G = dt gamma_l / (rho k) = 0.613", "1.15 (1 - alpha) = 0.575"]),
@@ -150,7 +153,7 @@ def test_list_names_builtin_scenes():
     assert names == ["collapse_dry", "collapse_saturated_psi-5", "collapse_saturated_psi0",
                      "collapse_saturated_psi2.5", "geostatic_column", "harmonic",
                      "retrogressive_k0_0.5", "retrogressive_k0_1.5", "strip_footing",
-                     "terzaghi"]
+                     "terzaghi", "terzaghi_undrained"]
 
 
 def test_set_override_reaches_resolved_scene(tmp_path):

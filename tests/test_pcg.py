@@ -75,7 +75,7 @@ def test_operator_is_symmetric_positive_definite_with_imposed_rows(storage):
     pair_weights(len(pairs), pairs, g, x, perm, rho, 1.0 / 9810.0, 1e-4 / 2000.0, w)
     fixed = x[:, 1] > 1.3  # a drained top
     s = np.full(n, storage)
-    S = _dense(n, lambda q, out: apply_operator(n, len(pairs), pairs, w, vol, s, fixed, q, out))
+    S = _dense(n, lambda q, out: apply_operator(n, len(pairs), pairs, w, w, vol, s, fixed, q, out))
     assert np.allclose(S, S.T, rtol=0, atol=1e-14 * np.abs(S).max())
     assert np.linalg.eigvalsh(S).min() > 0.0
     diag = np.zeros(n)
@@ -97,10 +97,10 @@ def test_pcg_solves_the_operator_with_imposed_values():
     s = np.full(n, 1e-8)
     value = np.where(fixed, 2e3, 0.0)
     rhs = vol * np.random.default_rng(9).normal(0.0, 1e-6, n)
-    fixed_rhs(n, len(pairs), pairs, w, vol, s, fixed, value, rhs)
+    fixed_rhs(n, len(pairs), pairs, w, w, vol, s, fixed, value, rhs)
 
     def apply(q, out):
-        apply_operator(n, len(pairs), pairs, w, vol, s, fixed, q, out)
+        apply_operator(n, len(pairs), pairs, w, w, vol, s, fixed, q, out)
 
     diag = np.zeros(n)
     operator_diagonal(n, len(pairs), pairs, w, vol, s, diag)
@@ -113,7 +113,7 @@ def test_pcg_solves_the_operator_with_imposed_values():
     # the full system: imposed rows plus the free rows with their imposed neighbours
     out = np.zeros(n)
     w_full = w.copy()
-    apply_operator(n, len(pairs), pairs, w_full, vol, s, np.zeros(n, bool), p, out)
+    apply_operator(n, len(pairs), pairs, w_full, w_full, vol, s, np.zeros(n, bool), p, out)
     free = ~fixed
     rhs0 = vol * np.random.default_rng(9).normal(0.0, 1e-6, n)
     terms = np.abs(diag * p).max()  # the size of the terms that cancel in a row
@@ -122,3 +122,38 @@ def test_pcg_solves_the_operator_with_imposed_values():
     again = pcg(apply, diag, rhs, p.copy(), n, _serial_dot(n), lambda q: None, 1e-8, n,
                 PCGWork())
     assert again.iterations == 0 and math.isfinite(again.residual)
+
+
+def test_compiled_serial_pcg_gives_the_same_bits():
+    """`kernels/pcg_serial.py` (one rank) against `psph.pcg` with the exact dot products
+    of one rank: same iterates, iteration count, residual and solution, to the last bit,
+    with imposed rows and images' split weights (w_diag != w_off)."""
+    from psph.kernels.pcg_serial import pcg_serial
+
+    x, vol, perm, rho, pairs, g, _ = _cloud()
+    n = len(x)
+    w = np.zeros(len(pairs))
+    pair_weights(len(pairs), pairs, g, x, perm, rho, 1.0 / 9810.0, 1e-4 / 2000.0, w)
+    w_off = w * np.random.default_rng(5).uniform(0.5, 1.0, len(w))
+    fixed = x[:, 1] > 1.3
+    s = np.full(n, 1e-6)
+    value = np.where(fixed, 2e3, 0.0)
+    rhs = vol * np.random.default_rng(9).normal(0.0, 1e-6, n)
+    fixed_rhs(n, len(pairs), pairs, w, w_off, vol, s, fixed, value, rhs)
+    diag = np.zeros(n)
+    operator_diagonal(n, len(pairs), pairs, w, vol, s, diag)
+
+    def apply(q, out):
+        apply_operator(n, len(pairs), pairs, w, w_off, vol, s, fixed, q, out)
+
+    p_py = np.where(fixed, value, 0.0)
+    res = pcg(apply, diag, rhs, p_py, n, _serial_dot(n), lambda q: None, 1e-10, 2 * n,
+              PCGWork())
+    p_nb = np.where(fixed, value, 0.0)
+    wk = PCGWork()
+    wk.ensure(n)
+    it, r, ok = pcg_serial(n, n, len(pairs), pairs, w, w_off, vol, s, fixed, diag, rhs, p_nb,
+                           np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.z, wk.d,
+                           wk.sd, np.zeros(EXPANSION_CAP))
+    assert res.converged and ok and it == res.iterations and r == res.residual
+    assert np.array_equal(p_nb, p_py)

@@ -33,6 +33,10 @@ def _stages(overrides):
      ["update[explicit->tpi,drucker_prager]"], ["elastic"]),
     (["boundaries.left.motion='free'", "boundaries.right.motion='free'",
       "boundaries.bottom.motion='free'"], [], ["ghosts"]),
+    # the free drained top is a plane only with the default drained_boundary = "mirror"
+    ([], ["drained_planes"], []),
+    (["pressure.drained_boundary='layer'"], [], ["drained_planes"]),
+    (["boundaries.top.motion='slip'"], [], ["drained_planes"]),  # a wall: its ghosts
 ])
 def test_only_needed_stages(overrides, present, absent):
     names = _stages(overrides)
@@ -49,7 +53,8 @@ def test_summary_lists_stages_and_times(tmp_path):
     scene = load_scene("terzaghi", SMALL + ["stabilisation.shepard_every=4"])
     run(scene, tmp_path, comm=MPI.COMM_SELF, quiet=True)
     s = json.loads((tmp_path / "summary.json").read_text())
-    assert s["stages_run"] == ["reset_halo", "ghosts", "neighbours", "shepard[every 4]",
+    assert s["stages_run"] == ["reset_halo", "ghosts", "neighbours", "drained_planes",
+                               "shepard[every 4]",
                                "interactions[momentum,pressure]", "update[explicit->tpi,elastic]"]
     assert set(s["stage_seconds"]) == set(s["stages_run"])
     steps = s["steps"]

@@ -29,8 +29,9 @@ def _block_on_wall(fixed: bool, velocity: tuple[float, float]):
     poro, vol = np.full(cap, 0.4), np.full(cap, DX * DX)
     rho, perm, acc, key = np.ones(cap), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float)
     ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([0.0]),
-                     np.array([1.0]), np.array([fixed]), x, v, v_slip, stress, p, p_prev,
-                     poro, vol, rho, perm, acc, key, np.zeros(2), np.zeros(cap, np.int64))
+                     np.array([1.0]), np.array([fixed]), np.array([False]), x, v, v_slip,
+                     stress, p, p_prev, poro, vol, rho, perm, acc, key, np.zeros(2),
+                     np.zeros(cap, np.int64), np.ones(cap))
     assert ng > 0
     m = n + ng
     sums = sums_for(x[:m], H, vol[:m], v=v[:m], poro=poro[:m], n_owned=n, v_slip=v_slip[:m],

@@ -299,6 +299,13 @@ class Slabs:
             return exact_total([parts])
         return exact_total(self.comm.allgather(np.ascontiguousarray(parts)))
 
+    def exact_sums(self, parts: list[np.ndarray]) -> list[float]:
+        """`exact_sum` of several expansions in one collective."""
+        if self.size == 1:
+            return [exact_total([p]) for p in parts]
+        gathered = self.comm.allgather([np.ascontiguousarray(p) for p in parts])
+        return [exact_total([g[j] for g in gathered]) for j in range(len(parts))]
+
     def allreduce_max(self, value: float) -> float:
         return self.comm.allreduce(value, op=MPI.MAX)
 

@@ -84,3 +84,40 @@ def exact_total(parts: list[np.ndarray]) -> float:
         return math.fsum(flat.tolist())
     except OverflowError:
         return math.nan
+
+
+@nb.njit(cache=True)
+def rounded_sum(partials: np.ndarray, m: int) -> float:
+    """The correctly rounded value of the expansion partials[:m] (increasing magnitude,
+    non-overlapping, as `_grow` leaves it): the final step of CPython's `math.fsum`, so
+    the same bits as `exact_total` of one rank's parts. NaN for a non-finite term (m < 0)
+    or an overflow."""
+    if m < 0:
+        return math.nan
+    if m == 0:
+        return 0.0
+    n = m - 1
+    hi = partials[n]
+    lo = 0.0
+    while n > 0:
+        x = hi
+        n -= 1
+        y = partials[n]
+        hi = x + y
+        yr = hi - x
+        lo = y - yr
+        if lo != 0.0:
+            break
+    if n > 0 and ((lo < 0.0 and partials[n - 1] < 0.0) or (lo > 0.0 and partials[n - 1] > 0.0)):
+        y = lo * 2.0
+        x = hi + y
+        yr = x - hi
+        if y == yr:
+            hi = x
+    return hi if math.isfinite(hi) else math.nan
+
+
+@nb.njit(cache=True)
+def exact_dot(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) -> float:
+    """sum_k a[k] b[k] over k < n, correctly rounded (one rank's `Slabs.exact_sum`)."""
+    return rounded_sum(partials, dot_expansion(a, b, n, partials))

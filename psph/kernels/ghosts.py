@@ -8,7 +8,9 @@ stretching rates take it, see `interactions.py`); effective stress mirrored (she
 component reversed on a free-slip wall, kept on a fixed one so that the wall resists
 tangential motion); porosity, volume, density and permeability copied; pore pressure
 copied plus the hydrostatic difference rho_l b.(x_ghost - x_real), so that the total
-head p + psi of Eq. (25) is mirrored and a wall is impermeable also under gravity.
+head p + psi of Eq. (25) is mirrored and a wall is impermeable also under gravity; on a
+drained wall (`wall_drained`) the pore pressure is mirrored antisymmetrically, p_ghost =
+-p_real, so that p = 0 on the wall plane itself (issue 14, item 3; `images.py`).
 Particles near two walls of different axes also get a corner ghost mirrored across both.
 """
 
@@ -16,8 +18,8 @@ import numba as nb
 
 
 @nb.njit(cache=True)
-def _mirror(src, dst, axis, pos, fixed, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm,
-            acc, key, head_b):
+def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev, poro, vol,
+            rho, perm, acc, key, head_b):
     x[dst, 0] = x[src, 0]
     x[dst, 1] = x[src, 1]
     x[dst, axis] = 2.0 * pos - x[src, axis]
@@ -35,9 +37,13 @@ def _mirror(src, dst, axis, pos, fixed, x, v, v_slip, stress, p, p_prev, poro, v
     # free slip: shear reversed, so a real-ghost pair carries no shear traction; fixed:
     # shear kept, so the wall's shear reaction resists sliding along it
     stress[dst, 3] = stress[src, 3] if fixed else -stress[src, 3]
-    dp = head_b[0] * (x[dst, 0] - x[src, 0]) + head_b[1] * (x[dst, 1] - x[src, 1])
-    p[dst] = p[src] + dp
-    p_prev[dst] = p_prev[src] + dp
+    if drained:
+        p[dst] = -p[src]
+        p_prev[dst] = -p_prev[src]
+    else:
+        dp = head_b[0] * (x[dst, 0] - x[src, 0]) + head_b[1] * (x[dst, 1] - x[src, 1])
+        p[dst] = p[src] + dp
+        p_prev[dst] = p_prev[src] + dp
     poro[dst] = poro[src]
     vol[dst] = vol[src]
     rho[dst] = rho[src]
@@ -47,7 +53,8 @@ def _mirror(src, dst, axis, pos, fixed, x, v, v_slip, stress, p, p_prev, poro, v
 
 @nb.njit(cache=True)
 def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
-                x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b, src):
+                wall_drained, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key,
+                head_b, src, src_sign):
     """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
     or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
     per wall / corner, so the neighbour order is the same on any number of ranks.
@@ -55,7 +62,9 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
     v_slip: rows 0..n_real-1 get v; ghosts get the free-slip mirror (v itself may be
     passed when no wall is fixed).
     src: src[g] = the real row a ghost g mirrors (corner ghosts too), for fields that are
-    mirrored again later (the search direction of the pressure solve)."""
+    mirrored again later (the search direction of the pressure solve), and src_sign[g]
+    the sign that carries a pressure increment to it (-1 across a drained wall).
+    wall_drained[w]: the wall's pore pressure is mirrored antisymmetrically (p = 0 on it)."""
     nw = wall_axis.shape[0]
     for j in range(n_real):
         v_slip[j, 0] = v[j, 0]
@@ -68,10 +77,11 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 continue
             if g >= cap:
                 return -1
-            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], x, v, v_slip, stress, p,
-                    p_prev, poro, vol, rho, perm, acc, key, head_b)
+            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], wall_drained[w], x, v,
+                    v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
             key[g] = key[j] + key_stride * (1 + w)
             src[g] = j
+            src_sign[g] = -1.0 if wall_drained[w] else 1.0
             g += 1
             for w2 in range(w + 1, nw):
                 if wall_axis[w2] == wall_axis[w]:
@@ -82,10 +92,11 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 if g >= cap:
                     return -1
                 gg = g - 1
-                _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], x, v, v_slip,
-                        stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
+                _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], wall_drained[w2],
+                        x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 src[g] = j
+                src_sign[g] = src_sign[gg] * (-1.0 if wall_drained[w2] else 1.0)
                 g += 1
     return g - n_real
 

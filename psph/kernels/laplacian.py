@@ -21,6 +21,27 @@ partition-independent as its sums (1 vs 2 ranks bitwise).
 import numba as nb
 import numpy as np
 
+from psph.kernels.spline import dw_cubic
+
+
+def lattice_moment(dx: float, h: float) -> float:
+    """m0 = sum_j V_j (-W'(r_ij) / r_ij) y_ij^2 over a full square lattice of spacing dx:
+    the moment matrix M of Eq. (22) of an interior particle of the initial lattice is m0 I
+    (0.991 at h = 1.2 dx). Eq. (23) takes F~ with the normalised gradient M^-1 grad W; with
+    the plain gradient the Laplacian of a quadratic comes out m0 times too small, and the
+    consolidation with it (issue 14: Terzaghi +1 % of q at depth). The stress divergence
+    of Eq. (26) has the same factor: a uniform stress under a surface load q balanced m0 q.
+    The Darcy sums, the stress divergence and the projection's operator and velocity
+    correction are divided by m0 (`Simulation._interactions`, `PressureSolve`)."""
+    n = int(np.ceil(2.0 * h / dx))
+    m = 0.0
+    for i in range(-n, n + 1):
+        for j in range(-n, n + 1):
+            r = dx * np.hypot(i, j)
+            if 0.0 < r < 2.0 * h:
+                m += dx * dx * (-dw_cubic(r, h) / r) * (j * dx) ** 2
+    return m
+
 
 @nb.njit(cache=True)
 def pair_weights(n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray, x: np.ndarray,
@@ -39,38 +60,42 @@ def pair_weights(n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray, x: np.ndar
 
 
 @nb.njit(cache=True)
-def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, weights: np.ndarray,
-                   vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray, q: np.ndarray,
-                   out: np.ndarray) -> None:
-    """out[:n_owned] = S q (module docstring). The row of a `fixed` particle is its own
-    diagonal times q_i (scaled like a free row, so that one residual norm serves both); a
-    free row keeps the diagonal part w_ij q_i of a fixed neighbour j, and its w_ij q_j is
-    moved to the right-hand side (`fixed_rhs`), so S stays symmetric."""
+def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
+                   w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray,
+                   q: np.ndarray, out: np.ndarray) -> None:
+    """out[:n_owned] = S q (module docstring), a pair k adding V_a V_b (w_diag q_a - w_off q_b)
+    to row a (w_diag = w_off = w but where a drained plane's images enter, `images.py`).
+    The row of a `fixed` particle is its own diagonal times q_i (scaled like a free row, so
+    that one residual norm serves both); a free row keeps the diagonal part of a fixed
+    neighbour j, and its coupling to q_j is moved to the right-hand side (`fixed_rhs`), so
+    S stays symmetric."""
     for i in range(n_owned):
         out[i] = vol[i] * storage[i] * q[i]
     for k in range(n_pairs):
         a = pairs[k, 0]
         b = pairs[k, 1]
-        w = vol[a] * vol[b] * weights[k]
+        vv = vol[a] * vol[b]
+        wd = vv * w_diag[k]
+        wo = vv * w_off[k]
         qa = 0.0 if fixed[a] else q[a]
         qb = 0.0 if fixed[b] else q[b]
         if a < n_owned:
-            out[a] += w * (q[a] if fixed[a] else qa - qb)
+            out[a] += wd * q[a] if fixed[a] else wd * qa - wo * qb
         if b < n_owned:
-            out[b] += w * (q[b] if fixed[b] else qb - qa)
+            out[b] += wd * q[b] if fixed[b] else wd * qb - wo * qa
 
 
 @nb.njit(cache=True)
-def operator_diagonal(n_owned: int, n_pairs: int, pairs: np.ndarray, weights: np.ndarray,
+def operator_diagonal(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
                       vol: np.ndarray, storage: np.ndarray, out: np.ndarray) -> None:
-    """The diagonal of S, V_i s_i + sum_j V_i V_j w_ij, for free and fixed rows alike (the
-    Jacobi preconditioner)."""
+    """The diagonal of S, V_i s_i + sum_j V_i V_j w_diag_ij, for free and fixed rows alike
+    (the Jacobi preconditioner)."""
     for i in range(n_owned):
         out[i] = vol[i] * storage[i]
     for k in range(n_pairs):
         a = pairs[k, 0]
         b = pairs[k, 1]
-        w = vol[a] * vol[b] * weights[k]
+        w = vol[a] * vol[b] * w_diag[k]
         if a < n_owned:
             out[a] += w
         if b < n_owned:
@@ -78,26 +103,28 @@ def operator_diagonal(n_owned: int, n_pairs: int, pairs: np.ndarray, weights: np
 
 
 @nb.njit(cache=True)
-def fixed_rhs(n_owned: int, n_pairs: int, pairs: np.ndarray, weights: np.ndarray,
-              vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray, value: np.ndarray,
-              rhs: np.ndarray) -> None:
+def fixed_rhs(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
+              w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray,
+              value: np.ndarray, rhs: np.ndarray) -> None:
     """Right-hand side of the imposed values: a fixed row gets its diagonal times its
-    value, a free row the couplings w_ij value_j of its fixed neighbours."""
+    value, a free row the couplings w_off_ij value_j of its fixed neighbours."""
     for i in range(n_owned):
         if fixed[i]:
             rhs[i] = vol[i] * storage[i] * value[i]
     for k in range(n_pairs):
         a = pairs[k, 0]
         b = pairs[k, 1]
-        w = vol[a] * vol[b] * weights[k]
+        vv = vol[a] * vol[b]
+        wd = vv * w_diag[k]
+        wo = vv * w_off[k]
         if a < n_owned and fixed[a]:
-            rhs[a] += w * value[a]
+            rhs[a] += wd * value[a]
         elif a < n_owned and fixed[b]:
-            rhs[a] += w * value[b]
+            rhs[a] += wo * value[b]
         if b < n_owned and fixed[b]:
-            rhs[b] += w * value[b]
+            rhs[b] += wd * value[b]
         elif b < n_owned and fixed[a]:
-            rhs[b] += w * value[a]
+            rhs[b] += wo * value[a]
 
 
 @nb.njit(cache=True)

@@ -57,20 +57,22 @@ def imposed_increments(n_owned: int, sums: np.ndarray, drained_from: np.ndarray,
 
 
 @nb.njit(cache=True)
-def mirror_to_ghosts(n_real: int, n_total: int, src: np.ndarray, field: np.ndarray) -> None:
-    """Ghost rows take the value of the row they mirror (a pressure increment has no
-    hydrostatic shift)."""
+def mirror_to_ghosts(n_real: int, n_total: int, src: np.ndarray, sign: np.ndarray,
+                     field: np.ndarray) -> None:
+    """Ghost rows take sign times the value of the row they mirror: a pressure increment
+    has no hydrostatic shift, and changes sign across a drained wall (`ghosts.py`)."""
     for g in range(n_real, n_total):
         for c in range(field.shape[1]):
-            field[g, c] = field[src[g], c]
+            field[g, c] = sign[g] * field[src[g], c]
 
 
 @nb.njit(cache=True, error_model="numpy")
 def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray,
                         vol: np.ndarray, rho: np.ndarray, dp: np.ndarray, dt: float,
-                        dv: np.ndarray, v: np.ndarray, acc: np.ndarray) -> None:
-    """v_i += dt a_i and acc_i += a_i with a_i = -sum_j V_j (dp_i + dp_j) grad_i W_ij / rho_i,
-    the pore-pressure part of Eq. (26) for the increment, over the recorded pairs."""
+                        norm: float, dv: np.ndarray, v: np.ndarray, acc: np.ndarray) -> None:
+    """v_i += dt a_i and acc_i += a_i with a_i = -norm sum_j V_j (dp_i + dp_j) grad_i W_ij /
+    rho_i, the pore-pressure part of Eq. (26) for the increment, over the recorded pairs
+    (norm: 1 / the lattice moment, as the step's stress divergence)."""
     for i in range(n_owned):
         dv[i, 0] = 0.0
         dv[i, 1] = 0.0
@@ -85,8 +87,8 @@ def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: n
             dv[b, 0] += vol[a] * f * pair_g[k, 0]
             dv[b, 1] += vol[a] * f * pair_g[k, 1]
     for i in range(n_owned):
-        a0 = dv[i, 0] / rho[i]
-        a1 = dv[i, 1] / rho[i]
+        a0 = norm * dv[i, 0] / rho[i]
+        a1 = norm * dv[i, 1] / rho[i]
         acc[i, 0] += a0
         acc[i, 1] += a1
         v[i, 0] += dt * a0

@@ -71,7 +71,32 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
         data["traction"][layer] = -normal * dx  # pressure pushes inward over length dx
         data["surface"][layer] = 1.0
     geostatic(scene, data)
+    if scene.initial.undrained_load:
+        undrained_load(scene, data)
     return data
+
+
+def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
+    """The instantaneous undrained response of a laterally confined column to its step
+    load q (`initial.undrained_load`): the pore water and the skeleton share the strain,
+    p0 = q / (1 + n M / K_l) with M the plane-strain constrained modulus, sigma' = -(q - p0)
+    along the load and nu / (1 - nu) of that across it (in plane and out of plane). The
+    reference of Terzaghi's problem starts from this state (psph/verify/terzaghi.py)."""
+    m = scene.material
+    load = scene.loads[0]
+    lam = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu))
+    shear = m.E / (2 * (1 + m.nu))
+    modulus = lam + 2 * shear
+    p0 = load.pressure / (1.0 + m.porosity * modulus / m.K_l)
+    along = -(load.pressure - p0)
+    n = len(data["key"])
+    stress = np.zeros((n, 4))
+    axis = 0 if load.side in ("left", "right") else 1
+    stress[:, :3] = lam / modulus * along
+    stress[:, axis] = along
+    data["stress"] = stress
+    data["p"] = np.full(n, p0)
+    data["p_prev"] = data["p"].copy()
 
 
 def geostatic(scene, data: dict[str, np.ndarray]) -> None:
@@ -98,7 +123,9 @@ def geostatic(scene, data: dict[str, np.ndarray]) -> None:
         head = depth - 0.5 * dx if init.water_table == "surface" \
             else init.water_table - x[:, 1]
         p = scene.material.rho_l * g * np.maximum(head, 0.0)
-        p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0), 0.0, p)
+        if scene.pressure.drained_boundary == "layer":
+            p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0),
+                         0.0, p)
         data["p"] = p
         data["p_prev"] = p.copy()
     if init.k0 is not None:

@@ -79,6 +79,17 @@ class Terzaghi:
         mean_p = self.p0 * (np.exp(-np.outer(tv, m**2)) @ (2 / m**2))  # (1/H) int p dz
         return (self.load - mean_p) * self.height / self.modulus
 
+    def displacement(self, depth: float, t) -> np.ndarray:
+        """Downward displacement (m) of the soil at `depth` below the top: the settlement
+        less the compression of the layer above it, (q d - int_0^d p dz) / M (16-point
+        Gauss-Legendre over the layer). The loaded top row of a particle column sits dx/2
+        below the surface, so its settlement is this at depth dx/2."""
+        g, wg = np.polynomial.legendre.leggauss(16)
+        z = 0.5 * depth * (g + 1.0)
+        tt = np.atleast_1d(np.asarray(t, float))
+        layer = np.array([0.5 * depth * wg @ self.pressure(z, ti) for ti in tt])
+        return self.settlement(tt) - (self.load * depth - layer) / self.modulus
+
 
 def from_scene(scene) -> Terzaghi:
     """The column of a scene: load on the top, height = the blocks' height, drained at the

@@ -1,0 +1,140 @@
+"""Drained sides at the true surface: antisymmetric pressure images (issue 14, item 3).
+
+A drained side holds p = 0 on its surface, the plane x[axis] = pos, not on the outer
+particle layer dx/2 inside it. The Darcy terms of Eq. (23) (the sums Q, sA, sAp and sApsi
+of `interactions.py`) see, across the plane, the odd extension of the pore pressure: the
+image b* of every neighbour b (its position mirrored, p_b* = -p_b), and each particle's own
+image a*. The odd extension of a field that is linear near the plane is the same linear
+field, so the SPH Laplacian keeps its exactness there and p = 0 falls on the plane itself.
+
+No image rows are made. Both rows of an image pair lie on the soil side of the plane, and
+mirroring one of them only lengthens the pair: |x_a - x_b*| >= |x_a - x_b|. So every image
+pair within the 2h support is also a direct pair, and one pass over the pairs the sweep
+recorded (same order, so as partition-independent as the sweep) finds them all.
+
+A plane row of `planes` is (axis, pos, sign, active): sign +1 with the soil at larger
+x[axis]. Walls with mirror ghosts get the same extension from their ghosts instead (p of a
+drained wall's ghost is -p of its source, `ghosts.py`); planes are for the free sides.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from psph.kernels.spline import dw_cubic
+
+
+@nb.njit(cache=True, inline="always")
+def _add_image(s, vol_j, kbar, f2, p_image, d0, d1, rho_l_b0, rho_l_b1):
+    """One image neighbour at x_i + (d0, d1) with pressure p_image into row s."""
+    aij = vol_j * kbar * f2
+    s[14] += vol_j * d0 * f2
+    s[15] += vol_j * d1 * f2
+    s[16] += aij
+    s[17] += aij * p_image
+    s[18] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: np.ndarray,
+               p_prev: np.ndarray, vol: np.ndarray, perm: np.ndarray, planes: np.ndarray,
+               h: float, tpi_alpha: float, rho_l_b0: float, rho_l_b1: float,
+               sums: np.ndarray) -> None:
+    """Add the images across each active plane to the Darcy sums (columns 14-18) of owned
+    rows: the image of the other row of every recorded pair, then each row's own image.
+    p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the elevation head psi = -rho_l b.x
+    is taken at the image's position (it is a known field, not mirrored)."""
+    support2 = 4.0 * h * h
+    for q in range(planes.shape[0]):
+        if planes[q, 3] == 0.0:
+            continue
+        ax = int(planes[q, 0])
+        pos = planes[q, 1]
+        sg = planes[q, 2]
+        for k in range(n_pairs):
+            a = pairs[k, 0]
+            b = pairs[k, 1]
+            if sg * (x[a, ax] - pos) <= 0.0 or sg * (x[b, ax] - pos) <= 0.0:
+                continue
+            d_ax = 2.0 * pos - x[a, ax] - x[b, ax]  # x_b*[ax] - x_a[ax] = x_a*[ax] - x_b[ax]
+            d_o = x[b, 1 - ax] - x[a, 1 - ax]
+            r2 = d_ax * d_ax + d_o * d_o
+            if r2 >= support2:
+                continue
+            r = math.sqrt(r2)
+            f2 = -2.0 * dw_cubic(r, h) / r
+            kbar = 0.5 * (perm[a] + perm[b])
+            if a < n_owned:
+                pt = p[b] + tpi_alpha * (p[b] - p_prev[b])
+                d0, d1 = (d_ax, d_o) if ax == 0 else (d_o, d_ax)
+                _add_image(sums[a], vol[b], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+            if b < n_owned:
+                pt = p[a] + tpi_alpha * (p[a] - p_prev[a])
+                d0, d1 = (d_ax, -d_o) if ax == 0 else (-d_o, d_ax)
+                _add_image(sums[b], vol[a], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+        for i in range(n_owned):
+            d_ax = 2.0 * (pos - x[i, ax])
+            if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
+                continue
+            r = abs(d_ax)
+            f2 = -2.0 * dw_cubic(r, h) / r
+            pt = p[i] + tpi_alpha * (p[i] - p_prev[i])
+            d0, d1 = (d_ax, 0.0) if ax == 0 else (0.0, d_ax)
+            _add_image(sums[i], vol[i], perm[i], f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+
+
+@nb.njit(cache=True)
+def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
+                  perm: np.ndarray, vol: np.ndarray, planes: np.ndarray, h: float,
+                  k_scale: float, w: np.ndarray, w_diag: np.ndarray, w_off: np.ndarray,
+                  storage: np.ndarray) -> None:
+    """The images in the operator of the pressure solve (`laplacian.py`): a recorded pair
+    (a, b) of weight w couples a to b* with the Darcy weight w* = 2F_ab* k_scale kbar, and
+    q_a - q_b* = q_a + q_b, so the pair's diagonal weight is w + w* and its off-diagonal
+    w - w* (still symmetric: the reflection keeps |x_a - x_b*| = |x_b - x_a*|). A row's own
+    image adds 2 V_i w*_ii q_i, kept in `storage` (V_i storage_i q_i of the operator)."""
+    support2 = 4.0 * h * h
+    for k in range(n_pairs):
+        w_diag[k] = w[k]
+        w_off[k] = w[k]
+    for q in range(planes.shape[0]):
+        if planes[q, 3] == 0.0:
+            continue
+        ax = int(planes[q, 0])
+        pos = planes[q, 1]
+        sg = planes[q, 2]
+        for k in range(n_pairs):
+            a = pairs[k, 0]
+            b = pairs[k, 1]
+            if sg * (x[a, ax] - pos) <= 0.0 or sg * (x[b, ax] - pos) <= 0.0:
+                continue
+            d_ax = 2.0 * pos - x[a, ax] - x[b, ax]
+            d_o = x[b, 1 - ax] - x[a, 1 - ax]
+            r2 = d_ax * d_ax + d_o * d_o
+            if r2 >= support2:
+                continue
+            r = math.sqrt(r2)
+            wi = -2.0 * dw_cubic(r, h) / r * k_scale * 0.5 * (perm[a] + perm[b])
+            w_diag[k] += wi
+            w_off[k] -= wi
+        for i in range(n_owned):
+            d_ax = 2.0 * (pos - x[i, ax])
+            if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
+                continue
+            r = abs(d_ax)
+            storage[i] += 2.0 * vol[i] * (-2.0 * dw_cubic(r, h) / r) * k_scale * perm[i]
+
+
+@nb.njit(cache=True)
+def row_displacement(n_owned: int, x: np.ndarray, u: np.ndarray, axis: int, pos: float,
+                     sign: float, width: float, out: np.ndarray) -> int:
+    """out[:m] = u[i, axis] of the owned rows within `width` of the plane on its soil side
+    (the outer particle layer of a free drained side), in row order; returns m."""
+    m = 0
+    for i in range(n_owned):
+        d = sign * (x[i, axis] - pos)
+        if 0.0 < d < width:
+            out[m] = u[i, axis]
+            m += 1
+    return m
