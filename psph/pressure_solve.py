@@ -63,6 +63,29 @@ class PressureSolve:
                       a["storage"])
         return a["w_diag"], a["w_off"]
 
+    def _system(self, p: np.ndarray, t: float) -> tuple:
+        """The linear system of the step about the pressure p (p^n for the solve, p^(n-1)
+        for the residual of a step already taken, whose drained rows were imposed at time
+        t): storage, right-hand side with the imposed rows' couplings, pair weights and
+        the imposed rows. Returns (arrays, w_diag, w_off, fixed, imposed values)."""
+        sim = self.sim
+        st = sim.store
+        s = sim.soil
+        n, npairs = st.n_owned, sim.n_pairs
+        a = self._arrays(st.cap, npairs)
+        imposed, fixed = a["imposed"], a["fixed"]
+        projection_rhs(n, sim.sums, p, st.perm, st.vol, st.poro, s.rho_l, sim.body[0],
+                       sim.body[1], s.gamma_l, s.K_l, sim.dt, a["storage"], a["rhs"])
+        wd, wo = self._weights(a)
+        imposed_increments(n, sim.sums, st.drained_from, sim.drainage.layer_clock(t),
+                           sim.ponding == 2, p, imposed)
+        self.refresh_rows(imposed)
+        nt = st.n_total
+        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
+        value = imposed[:, 1]
+        fixed_rhs(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, value, a["rhs"])
+        return a, wd, wo, fixed, value
+
     def residual(self) -> float:
         """How far this step's pressure is from the solve of the projection: the relative
         residual ||b - S dp|| / ||b|| of its linear system (`project`, Eq. 29 with the
@@ -72,22 +95,9 @@ class PressureSolve:
         imposed increment and add nothing. Collective; the same bits on any rank count."""
         sim = self.sim
         st = sim.store
-        s = sim.soil
         n, npairs = st.n_owned, sim.n_pairs
-        a = self._arrays(st.cap, npairs)
-        dp, imposed, fixed = a["dp"], a["imposed"], a["fixed"]
-        projection_rhs(n, sim.sums, st.p_prev, st.perm, st.vol, st.poro, s.rho_l,
-                       sim.body[0], sim.body[1], s.gamma_l, s.K_l, sim.dt, a["storage"],
-                       a["rhs"])
-        wd, wo = self._weights(a)
-        imposed_increments(n, sim.sums, st.drained_from,
-                           sim.drainage.layer_clock(sim.t - sim.dt), sim.ponding == 2,
-                           st.p_prev, imposed)
-        self.refresh_rows(imposed)
-        nt = st.n_total
-        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
-        fixed_rhs(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, imposed[:, 1],
-                  a["rhs"])
+        a, wd, wo, fixed, _ = self._system(st.p_prev, sim.t - sim.dt)
+        dp = a["dp"]
         d = dp[:, 0]
         np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
         self.refresh_rows(dp, signed=True)
@@ -120,21 +130,11 @@ class PressureSolve:
         reductions and halo refreshes)."""
         sim = self.sim
         st = sim.store
-        s = sim.soil
         n, npairs = st.n_owned, sim.n_pairs
-        a = self._arrays(st.cap, npairs)
-        dp, imposed, fixed = a["dp"], a["imposed"], a["fixed"]
         dt = sim.dt
-        projection_rhs(n, sim.sums, st.p, st.perm, st.vol, st.poro, s.rho_l, sim.body[0],
-                       sim.body[1], s.gamma_l, s.K_l, dt, a["storage"], a["rhs"])
-        wd, wo = self._weights(a)
-        imposed_increments(n, sim.sums, st.drained_from, sim.drainage.layer_clock(sim.t),
-                           sim.ponding == 2, st.p, imposed)
-        self.refresh_rows(imposed)
+        a, wd, wo, fixed, value = self._system(st.p, sim.t)
+        dp = a["dp"]
         nt = st.n_total
-        np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
-        value = imposed[:, 1]
-        fixed_rhs(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, value, a["rhs"])
         operator_diagonal(n, npairs, sim.pairs, wd, st.vol, a["storage"], a["diag"])
         # warm start: the last step's increment p^n - p^(n-1); imposed rows at their value
         d = dp[:, 0]

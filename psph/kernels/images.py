@@ -36,6 +36,29 @@ def _add_image(s, vol_j, kbar, f2, p_image, d0, d1, rho_l_b0, rho_l_b1):
     s[18] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
 
 
+@nb.njit(cache=True, inline="always")
+def _plane(planes, q):
+    """(axis, position, sign) of plane q, axis -1 while it is inactive."""
+    if planes[q, 3] == 0.0:
+        return -1, 0.0, 0.0
+    return int(planes[q, 0]), planes[q, 1], planes[q, 2]
+
+
+@nb.njit(cache=True, inline="always")
+def _image_of_pair(x, a, b, ax, pos, sg, support2):
+    """(d_ax, d_o, r) of b's image seen from a across the plane x[ax] = pos (d_ax along the
+    axis, d_o across; the same for a's image seen from b, d_o reversed), or r = -1 when a
+    row is beyond the plane or the image is out of the 2h support."""
+    if sg * (x[a, ax] - pos) <= 0.0 or sg * (x[b, ax] - pos) <= 0.0:
+        return 0.0, 0.0, -1.0
+    d_ax = 2.0 * pos - x[a, ax] - x[b, ax]  # x_b*[ax] - x_a[ax] = x_a*[ax] - x_b[ax]
+    d_o = x[b, 1 - ax] - x[a, 1 - ax]
+    r2 = d_ax * d_ax + d_o * d_o
+    if r2 >= support2:
+        return 0.0, 0.0, -1.0
+    return d_ax, d_o, math.sqrt(r2)
+
+
 @nb.njit(cache=True, error_model="numpy")
 def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: np.ndarray,
                p_prev: np.ndarray, vol: np.ndarray, perm: np.ndarray, planes: np.ndarray,
@@ -47,22 +70,15 @@ def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: 
     is taken at the image's position (it is a known field, not mirrored)."""
     support2 = 4.0 * h * h
     for q in range(planes.shape[0]):
-        if planes[q, 3] == 0.0:
+        ax, pos, sg = _plane(planes, q)
+        if ax < 0:
             continue
-        ax = int(planes[q, 0])
-        pos = planes[q, 1]
-        sg = planes[q, 2]
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
-            if sg * (x[a, ax] - pos) <= 0.0 or sg * (x[b, ax] - pos) <= 0.0:
+            d_ax, d_o, r = _image_of_pair(x, a, b, ax, pos, sg, support2)
+            if r < 0.0:
                 continue
-            d_ax = 2.0 * pos - x[a, ax] - x[b, ax]  # x_b*[ax] - x_a[ax] = x_a*[ax] - x_b[ax]
-            d_o = x[b, 1 - ax] - x[a, 1 - ax]
-            r2 = d_ax * d_ax + d_o * d_o
-            if r2 >= support2:
-                continue
-            r = math.sqrt(r2)
             f2 = -2.0 * dw_cubic(r, h) / r
             kbar = 0.5 * (perm[a] + perm[b])
             if a < n_owned:
@@ -99,22 +115,15 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
         w_diag[k] = w[k]
         w_off[k] = w[k]
     for q in range(planes.shape[0]):
-        if planes[q, 3] == 0.0:
+        ax, pos, sg = _plane(planes, q)
+        if ax < 0:
             continue
-        ax = int(planes[q, 0])
-        pos = planes[q, 1]
-        sg = planes[q, 2]
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
-            if sg * (x[a, ax] - pos) <= 0.0 or sg * (x[b, ax] - pos) <= 0.0:
+            r = _image_of_pair(x, a, b, ax, pos, sg, support2)[2]
+            if r < 0.0:
                 continue
-            d_ax = 2.0 * pos - x[a, ax] - x[b, ax]
-            d_o = x[b, 1 - ax] - x[a, 1 - ax]
-            r2 = d_ax * d_ax + d_o * d_o
-            if r2 >= support2:
-                continue
-            r = math.sqrt(r2)
             wi = -2.0 * dw_cubic(r, h) / r * k_scale * 0.5 * (perm[a] + perm[b])
             w_diag[k] += wi
             w_off[k] -= wi
