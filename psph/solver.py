@@ -357,7 +357,10 @@ class Simulation:
     def _project(self) -> None:
         """The pressure increment of the step from one solve of Eq. (29) with its velocity
         correction (`PressureSolve.project`), then the halo and ghost copies and the
-        velocity sums of the corrected velocity. Collective."""
+        velocity sums of the corrected velocity. Collective. Skipped while another scheme
+        is in force (the gravity loading of `equilibrate` holds p hydrostatic)."""
+        if self.scheme != SCHEME_PROJECTION:
+            return
         self.pressure_solve.project()
         st = self.store
         self.slabs.refresh_halo(st.v)
