@@ -13,8 +13,10 @@ For each run directory:
   against -0.5 MPa and the slope's initial total vertical stress at its base,
   rho_sat g H (pore pressure above it would be a negative effective vertical stress);
 - the excess p of the debris (moved more than 5 dx) after each slide: its median and 95th
-  percentile at the slide and just before the next one (or at the end): Fig. 20 shows it
-  dissipating.
+  percentile at the slide and just before the next one (or at the end), and the same
+  statistics later over the particles that were debris at the slide (the debris grows
+  between slides with freshly sheared soil, whose excess is new, not undissipated):
+  Fig. 20 shows it dissipating.
 
 Prints a table and writes bench/out/retrogressive_pressure.json.
 """
@@ -35,6 +37,11 @@ from psph.verify.pressure import DEBRIS_DX, excess_pressure  # noqa: E402
 
 BAND_EPS = 0.05  # equivalent plastic strain of the shear zone
 BASE_ZONE_M = 4.0  # the basal shear zone starts in the bottom 4 m
+
+
+def _median_p95(ex: np.ndarray) -> dict:
+    return {"median_Pa": float(np.median(ex)) if len(ex) else None,
+            "p95_Pa": float(np.percentile(ex, 95)) if len(ex) else None}
 
 
 def run_checks(out: Path) -> dict:
@@ -82,10 +89,15 @@ def run_checks(out: Path) -> dict:
         for tt in (t, t_next):
             s = snaps[int(np.argmin(np.abs(times - tt)))]
             debris = np.linalg.norm(s["u"], axis=1) > DEBRIS_DX * dx
-            ex = excess_pressure(s, scene)[debris]
+            ex = excess_pressure(s, scene)
             stats.append({"time_s": float(s["time"]), "particles": int(debris.sum()),
-                          "median_Pa": float(np.median(ex)) if len(ex) else None,
-                          "p95_Pa": float(np.percentile(ex, 95)) if len(ex) else None})
+                          **_median_p95(ex[debris])})
+            if tt == t:
+                ids_at = s["id"][debris]
+            else:  # the same particles later: their own dissipation, without the
+                # freshly sheared soil that joined the debris since
+                same = np.isin(s["id"], ids_at)
+                stats[-1]["same_particles"] = _median_p95(ex[same])
         decay.append({"slide": k + 1, "at": stats[0], "later": stats[1]})
     result["debris_after_slides"] = decay
     return result
@@ -108,7 +120,9 @@ def main(argv: list[str]) -> int:
               f"(bar: sigma_v at the base {r['sigma_v_base_Pa'] / 1e3:.0f} kPa; "
               f"{r['p_above_sigma_v_base']} particle-snapshots above it)")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
-              f"{'later t':>7s} {'median':>8s} {'p95':>8s}  (excess p of the debris, kPa)")
+              f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
+              "  (excess p of the debris, kPa; 'same': the particles of the debris at the "
+              "slide, later)")
         for d in r["debris_after_slides"]:
             a, b = d["at"], d["later"]
 
@@ -116,7 +130,9 @@ def main(argv: list[str]) -> int:
                 return "-" if v is None else f"{v / 1e3:8.1f}"
             print(f"  {d['slide']:5d} {a['time_s']:6.1f} {a['particles']:6d} "
                   f"{f(a['median_Pa']):>8s} {f(a['p95_Pa']):>8s}   {b['time_s']:7.1f} "
-                  f"{f(b['median_Pa']):>8s} {f(b['p95_Pa']):>8s}")
+                  f"{f(b['median_Pa']):>8s} {f(b['p95_Pa']):>8s}   "
+                  f"{f(b['same_particles']['median_Pa']):>8s} "
+                  f"{f(b['same_particles']['p95_Pa']):>8s}")
     out = ROOT / "bench" / "out"
     out.mkdir(exist_ok=True)
     (out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")

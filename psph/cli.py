@@ -7,7 +7,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from psph.errors import Interrupted, NumericalError, SceneError
+from psph.errors import Interrupted, NumericalError, OutputError, SceneError
 
 
 def _rank() -> int:
@@ -74,6 +74,15 @@ def main(argv: list[str] | None = None) -> int:
         if rank0:
             print(f"psph: numerical failure: {e}", file=sys.stderr)
         return 3
+    except OutputError as e:
+        if rank0 or not e.collective:
+            print(f"psph: error: {e}", file=sys.stderr, flush=True)
+        if not e.collective:
+            from mpi4py import MPI
+
+            if MPI.COMM_WORLD.Get_size() > 1:  # the other ranks may wait in the write
+                MPI.COMM_WORLD.Abort(OutputError.exit_code)
+        return OutputError.exit_code
     except Interrupted as e:
         if rank0:
             print(f"psph: {e}", file=sys.stderr)

@@ -20,6 +20,20 @@ class Interrupted(Exception):
     exit_code = 75
 
 
+class OutputError(Exception):
+    """The output file system cannot take the next snapshot or checkpoint (full disk or
+    quota): one line naming the file, the cause and the last complete checkpoint. Exit
+    code 74 (EX_IOERR)."""
+
+    exit_code = 74
+
+    def __init__(self, message: str, collective: bool = True):
+        super().__init__(message)
+        # raised by every rank together (the space check), or by one rank's failed write,
+        # which may leave the others inside a collective
+        self.collective = collective
+
+
 # Stop signals that arrive outside a run (while Python imports, or after the run has
 # finished and restored its handlers): recorded, never the default action, which would
 # kill a finished run (a scheduler or jobs/local.sh sends them at a fixed wall time).

@@ -2,6 +2,7 @@
 
 import json
 import math
+import os
 import signal
 import time
 from pathlib import Path
@@ -9,9 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from psph.decomposition.slabs import Slabs, slab_cuts
-from psph.errors import EARLY_STOP_SIGNALS, Interrupted
+from psph.errors import EARLY_STOP_SIGNALS, Interrupted, OutputError, SceneError
 from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
+from psph.io.space import SNAPSHOT_ROW_BYTES, require_space
 from psph.kernels.update import SCHEME_NONE, SCHEME_PROJECTION
 from psph.physics.initial import initial_particles
 from psph.scene import Scene, check_restart_scene, to_toml
@@ -91,6 +93,25 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False,
         return _run(scene, out, comm, quiet, restart, stop)
 
 
+def check_output_directory(out: Path, comm) -> None:
+    """Rank 0 creates `out` and writes and removes a probe file in it; if either fails,
+    every rank raises SceneError (exit 2) with one line naming the directory and the
+    cause, before any work (collective)."""
+    problem = None
+    if comm.Get_rank() == 0:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            probe = out / f".psph-write-test-{os.getpid()}"
+            probe.write_bytes(b"")
+            probe.unlink()
+        except OSError as e:
+            problem = f"--out {out}: cannot create or write the output directory " \
+                      f"({e.strerror or type(e).__name__}{': ' + e.filename if e.filename else ''})"
+    problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        raise SceneError(problem)
+
+
 def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
          stop: StopRequest) -> dict:
     from mpi4py import MPI
@@ -101,6 +122,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     if restart is not None:  # read and check before anything is written
         meta, state = read_checkpoint(restart)
         check_restart_scene(meta["scene"], scene, f"--restart {restart}")
+    check_output_directory(out, comm)
     slabs = make_slabs(scene, comm, None if state is None else state["x"])
     rank0 = slabs.rank == 0
     toml_text = to_toml(scene)
@@ -135,6 +157,28 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     ck = scene.checkpoint
     ck_path = out / "checkpoint.h5"
     last_ck_wall = time.perf_counter()
+    # (step, t) of the newest complete checkpoint this run can be continued from
+    last_ck = None if meta is None else (meta["step"], meta["t"], Path(restart))
+
+    def resume_hint() -> str:
+        if last_ck is None:
+            return "no checkpoint written yet: free space and run again"
+        step, t, path = last_ck
+        return (f"the last complete checkpoint is {path} (step {step}, t = {t:.6g} s): "
+                f"free space, then continue with --restart {path}")
+
+    def guarded_write(path: Path, nbytes: int, write) -> None:
+        """The space check, then the collective write; an OSError in it (a quota the
+        file system does not report) becomes OutputError with the same hint."""
+        require_space(path, nbytes, comm, resume_hint())
+        try:
+            write()
+        except OSError as e:
+            tmp = path.with_name(path.name + ".tmp")
+            if rank0 and tmp.exists():
+                tmp.unlink()
+            raise OutputError(f"cannot write {path}: {e}; {resume_hint()}",
+                              collective=False) from None
     from psph.progress import Progress
 
     progress = Progress(end, enabled=rank0 and not quiet, start_time=sim.t)
@@ -143,7 +187,8 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
 
     def snapshot():
         slabs.check_census(sim.store, sim.alive, sim.step, sim.t)
-        writer.write(sim.step, sim.t, sim.store)
+        guarded_write(out / "particles.h5", sim.n_global * SNAPSHOT_ROW_BYTES,
+                      lambda: writer.write(sim.step, sim.t, sim.store))
         if monitor is not None:
             monitor.snapshot(sim)
         if rank0:
@@ -158,16 +203,19 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
             history.append(row)
 
     def checkpoint():
-        nonlocal last_ck_wall
+        nonlocal last_ck_wall, last_ck
         sim.check_failure()  # never save a broken state
         info = {"t": sim.t, "step": sim.step, "n_global": sim.n_global,
                 "n_ids": sim.n_ids, "removals_done": sim.removals_done,
                 "next_hist": next_hist, "scene": toml_text,
                 "monitor": None if monitor is None else monitor.state(),
                 "ranks": slabs.size}
-        write_checkpoint(ck_path, comm, sim.store, info, history=history if rank0 else None,
-                         alive=sim.alive)
+        nbytes = 8 * sim.n_global * sim.store.row_width + sim.n_ids + 400 * len(history)
+        guarded_write(ck_path, nbytes, lambda: write_checkpoint(
+            ck_path, comm, sim.store, info, history=history if rank0 else None,
+            alive=sim.alive))
         last_ck_wall = time.perf_counter()
+        last_ck = (sim.step, sim.t, ck_path)
 
     def control() -> bool:
         """Collective: raise a failure seen on any rank; checkpoint when due by wall
@@ -322,6 +370,13 @@ def _write_history(path: Path, rows: list[dict]) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def peak_rss_bytes() -> int:
+    """Peak resident memory of this process so far (bytes; Linux reports KiB)."""
+    import resource
+
+    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+
 def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
     comm = slabs.comm
     stage_local = {s.name: s.seconds for s in sim.stages}
@@ -332,6 +387,7 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
               for name in stage_local}
     steps = sim.step - sim.first_step  # this run's share (a restart starts later)
     psteps = sim.n_global * steps
+    memory = comm.allgather((peak_rss_bytes(), sim.state_bytes(), sim.store.n_owned))
     summary = {
         "scene": sim.scene.name,
         "wall_time_s": setup_seconds + loop_seconds,
@@ -349,6 +405,11 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
         "particle_steps_per_second_per_core":
             psteps / loop_seconds / slabs.size if loop_seconds > 0 else None,
         "stages_run": [s.name for s in sim.stages],
+        "memory": {
+            "peak_rss_bytes_per_rank": [m[0] for m in memory],
+            "state_bytes_per_rank": [m[1] for m in memory],
+            "state_bytes_per_owned_particle": max(m[1] / max(m[2], 1) for m in memory),
+        },
         "load_balance": {
             "measure": "max/mean particles owned per rank",
             "threshold": sim.scene.decomposition.imbalance_threshold,

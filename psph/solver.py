@@ -30,6 +30,7 @@ from psph.kernels.update import (
     SCHEME_TPI,
     advance,
     kick,
+    porosity_follows_pressure_filter,
     porosity_follows_stress_filter,
 )
 from psph.particles import ParticleStore
@@ -192,6 +193,13 @@ class Simulation:
         stages.append(Stage(f"update[{pname}{model}]", self._update))
         return stages
 
+    def state_bytes(self) -> int:
+        """Bytes of the running state on this rank: the particle store's arrays and the
+        simulation's own (scratch, neighbour lists, pair lists, bookkeeping)."""
+        arrays = list(self.store.arrays.values()) + [
+            a for a in vars(self).values() if isinstance(a, np.ndarray)]
+        return int(sum(a.nbytes for a in arrays))
+
     def _reset_halo(self) -> None:
         self.store.n_halo = self.store.n_ghost = 0
 
@@ -255,11 +263,20 @@ class Simulation:
             self.scratch_moments = np.zeros((st.cap, 18))
             self.scratch_trace = np.zeros(st.cap)
         mom = self.scratch_moments
+        stab = self.scene.stabilisation
+        s = self.soil
+        if stab.pressure_filter_porosity:
+            p_before = self.scratch_trace[:st.n_owned]
+            p_before[:] = st.p[:st.n_owned]
         shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
                          st.drained_from, self.drainage.layer_clock(self.t), self.cell_start,
                          self.order, self.ncell,
                          self.h, mom)
-        stab = self.scene.stabilisation
+        if stab.pressure_filter_porosity:
+            porosity_follows_pressure_filter(
+                st.n_owned, p_before, st.p, st.poro, st.poro0, st.vol, st.vol0, st.rho,
+                st.perm, s.rho_s, s.rho_l, self.scene.material.k, self.scene.material.C_k,
+                s.K_l)
         if stab.shepard_stress:
             stress_filter = mls_stress if stab.stress_filter == "mls" else shepard_stress
             if stab.stress_filter_porosity:
@@ -268,7 +285,6 @@ class Simulation:
             stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
                           self.order, self.ncell, self.h, mom)
             if stab.stress_filter_porosity:
-                s = self.soil
                 porosity_follows_stress_filter(
                     st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
                     st.perm, s.rho_s, s.rho_l, self.scene.material.k,

@@ -112,6 +112,20 @@ def test_missing_file(tmp_path):
     assert not out.exists()
 
 
+def test_output_directory_that_cannot_be_created_exit_2_one_line(tmp_path):
+    """An --out under a regular file (issue 15): exit 2, one line naming the directory and
+    the cause, before any work (it was exit 1 with a raw NotADirectoryError)."""
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    out = blocker / "out"
+    r = run_cli("run", "terzaghi", "--out", str(out), "--set", "time.end=1e-4")
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    assert str(out) in lines[0] and "Not a directory" in lines[0]
+    assert "Traceback" not in r.stderr and r.stdout == ""
+
+
 def test_unreadable_toml(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(TERZAGHI.replace("dx = 0.01", "dx = = 0.01"))

@@ -1,0 +1,129 @@
+"""One particle's pore pressure against its neighbours, and the terms of Eq. (26) that
+hold it there, from the snapshots of a run (issue 13, README cause 12).
+
+For the particle `id` at each snapshot (serial, numpy; walls mirrored as
+`kernels/ghosts.py` does: positions mirrored, p shifted by the hydrostatic difference on an
+impermeable wall or mirrored to -p on a drained one, velocities as on a free-slip wall):
+
+- p and the mean p of its neighbours within 2h, its porosity;
+- the kernel sum sum_j V_j W_ij (self included): 1 in a full, regular support, below 1
+  where the particle sits in a sparse spot;
+- S_i = sum_j V_j grad_i W_ij. The pair-symmetric Eq. (26) splits the pore pressure's
+  acceleration into -p_i S_i / rho_i (the particle's own pressure, zero only where the
+  support is symmetric) and -sum_j V_j p_j grad_i W_ij / rho_i (its neighbours'). Where
+  S_i is not zero, the particle's own pressure is a force on it, and its equilibrium
+  takes a pressure its neighbours do not have;
+- div v with the plain kernel gradient and with the corrected one of Eq. (22) (the one
+  Eq. 24-25 integrate).
+
+`python -m psph.verify.particle OUT ID [--from T0] [--to T1]` prints one row per snapshot.
+Volumes are taken from the porosity with the solid volume kept, V = dx^2 (1 - n0) / (1 - n).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from psph.kernels.spline import dw_cubic, w_cubic
+
+
+def _with_walls(snap: dict, scene) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Positions, velocities (free-slip mirror), pressures and row indices of the real
+    particles and their wall mirrors (one mirror per wall; corners are not doubled)."""
+    x, v, p = snap["x"], snap["v"], snap["p"]
+    xs, vs, ps, rows = [x], [v], [p], [np.arange(len(x))]
+    rho_l_b = scene.material.rho_l * np.asarray(scene.gravity, float)
+    lo, hi = scene.domain.min, scene.domain.max
+    for side, axis, pos in (("left", 0, lo[0]), ("right", 0, hi[0]),
+                            ("bottom", 1, lo[1]), ("top", 1, hi[1])):
+        wall = getattr(scene.boundaries, side)
+        if wall.motion == "free":
+            continue
+        xg = x.copy()
+        xg[:, axis] = 2.0 * pos - x[:, axis]
+        vg = v.copy()
+        vg[:, axis] = -v[:, axis]
+        if wall.flow == "drained":
+            pg = -p
+        else:
+            pg = p + (xg - x) @ rho_l_b
+        xs.append(xg)
+        vs.append(vg)
+        ps.append(pg)
+        rows.append(np.arange(len(x)))
+    return np.vstack(xs), np.vstack(vs), np.concatenate(ps), np.concatenate(rows)
+
+
+def particle_terms(snap: dict, pid: int, scene) -> dict:
+    """The quantities of the module docstring for particle `pid` of one snapshot."""
+    dx = scene.particles.dx
+    h = scene.particles.h_factor * dx
+    m = scene.material
+    n = snap["n"]
+    vol = dx * dx * (1.0 - m.porosity) / (1.0 - n)
+    rho = (1.0 - n) * m.rho_s + n * m.rho_l
+    xs, vs, ps, rows = _with_walls(snap, scene)
+    i = int(np.searchsorted(snap["id"], pid))
+    r = xs - xs[i]
+    d = np.hypot(r[:, 0], r[:, 1])
+    near = np.flatnonzero((d < 2.0 * h) & (d > 0.0))
+    vj = vol[rows[near]]
+    grad = np.array([dw_cubic(dd, h) for dd in d[near]])[:, None] * (-r[near]) / d[near, None]
+    s_i = (vj[:, None] * grad).sum(axis=0)
+    moment = (vj[:, None, None] * r[near][:, :, None] * grad[:, None, :]).sum(axis=0)
+    gv = (vj[:, None, None] * (vs[near] - vs[i])[:, :, None] * grad[:, None, :]).sum(axis=0)
+    real = near[near < len(n)]
+    return {
+        "time_s": float(snap["time"]), "y": float(xs[i, 1]), "x": float(xs[i, 0]),
+        "p": float(ps[i]), "p_neighbours": float(ps[real].mean()) if len(real) else np.nan,
+        "n": float(n[i]),
+        "kernel_sum": float(vol[i] * w_cubic(0.0, h)
+                            + sum(vv * w_cubic(dd, h) for vv, dd in zip(vj, d[near], strict=True))),
+        "S": s_i.tolist(),
+        "acc_own_p": (-ps[i] * s_i / rho[i]).tolist(),
+        "acc_neighbours_p": (-(vj * ps[near])[:, None] * grad).sum(axis=0) / rho[i],
+        "div_v_plain": float(np.trace(gv)),
+        "div_v_corrected": float(np.trace(gv @ np.linalg.inv(moment))),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    from psph.errors import SceneError
+    from psph.io.snapshots import read_snapshots
+    from psph.scene import run_scene
+
+    ap = argparse.ArgumentParser(prog="python -m psph.verify.particle",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("id", type=int)
+    ap.add_argument("--from", dest="t0", type=float, default=0.0)
+    ap.add_argument("--to", dest="t1", type=float, default=np.inf)
+    args = ap.parse_args(argv)
+    try:
+        scene = run_scene(args.out)
+        snaps = read_snapshots(args.out / "particles.h5")
+    except SceneError as e:
+        print(f"psph: error: {e}", file=sys.stderr)
+        return 2
+    print(f"{'t (s)':>7s} {'y (m)':>6s} {'p':>7s} {'p nb':>7s} {'n':>6s} {'sum VW':>6s} "
+          f"{'own p acc y':>11s} {'nb p acc y':>10s} {'div plain':>9s} {'div corr':>9s}"
+          "   (kPa, m/s^2, 1/s)")
+    for s in snaps:
+        if not args.t0 - 1e-9 <= s["time"] <= args.t1 + 1e-9:
+            continue
+        if args.id not in s["id"]:
+            continue
+        t = particle_terms(s, args.id, scene)
+        print(f"{t['time_s']:7.3f} {t['y']:6.3f} {t['p'] / 1e3:7.1f} "
+              f"{t['p_neighbours'] / 1e3:7.1f} {t['n']:6.3f} {t['kernel_sum']:6.3f} "
+              f"{t['acc_own_p'][1]:11.2f} {t['acc_neighbours_p'][1]:10.2f} "
+              f"{t['div_v_plain']:9.3f} {t['div_v_corrected']:9.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
