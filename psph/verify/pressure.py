@@ -243,6 +243,23 @@ def _fmt(v, scale: float = 1.0, spec: str = ".1f") -> str:
     return "-" if v is None else format(v / scale, spec)
 
 
+def _where_largest(snap: dict, scene) -> str:
+    """One line: sign, extent and bottom-row share of the particles in the top 1 % of
+    |excess p| of a snapshot, and the 99th percentile of |excess| in and above the two
+    bottom rows (y < 1.5 dx above the domain's floor)."""
+    ex = excess_pressure(snap, scene)
+    a = np.abs(ex)
+    top = a >= np.percentile(a, 99)
+    x, y = snap["x"][:, 0], snap["x"][:, 1]
+    base = y - scene.domain.min[1] < 1.5 * scene.particles.dx
+    return (f"t = {snap['time']:.3g} s, top 1 % of |excess| ({int(top.sum())} particles): "
+            f"{int((ex[top] > 0).sum())} positive, {int((ex[top] < 0).sum())} negative; "
+            f"x {x[top].min():.2f}..{x[top].max():.2f} m, y {y[top].min():.2f}..{y[top].max():.2f}"
+            f" m; {100 * base[top].mean():.0f} % in the two bottom rows; p99 of |excess| "
+            f"there {np.percentile(a[base], 99) / 1e3:.1f} kPa, above "
+            f"{np.percentile(a[~base], 99) / 1e3:.1f} kPa")
+
+
 def main(argv: list[str] | None = None) -> int:
     """`python -m psph.verify.pressure OUT [OUT ...] [--write]`: one line per run."""
     from psph.errors import SceneError
@@ -258,6 +275,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--at", type=float, default=None,
                     help="use the snapshots up to this time (s) only (compare runs of "
                     "different lengths at one time)")
+    ap.add_argument("--where", action="store_true",
+                    help="also say where the top 1 %% of |excess| sits at the last snapshot "
+                    "used: its sign, extent, and how much of it is in the two bottom rows")
     args = ap.parse_args(argv)
     print(f"{'run':<32} {'t_end':>6} {'min_ex':>9} {'max_ex':>9} {'p1_ex':>9} {'p99_ex':>9}"
           f" {'abs_p99':>9} {'cb_p_deb':>8} {'cb_pe_deb':>9}   (excess p in kPa: min, max, "
@@ -282,6 +302,8 @@ def main(argv: list[str] | None = None) -> int:
               f"{_fmt(o['abs_excess_p99_max_Pa'], 1e3):>9} "
               f"{_fmt(o['checkerboard_p_debris_last'], 1, '.3f'):>8} "
               f"{_fmt(o['checkerboard_p_eff_debris_last'], 1, '.3f'):>9}")
+        if args.where:
+            print("  " + _where_largest(snaps[-1], scene))
         if args.write and args.at is None:
             path = out / "summary.json"
             summary = json.loads(path.read_text()) if path.is_file() else {}
