@@ -182,10 +182,13 @@ class Stabilisation(_Model):
     # sigma' and n of Eq. (24) carry the same strain (issue 13: without it a debris-front
     # particle compacted to n = 0.021 while the filter erased the stress that resisted it)
     stress_filter_porosity: bool = True
-    # the porosity takes the strain the pressure filter (Eq. 46) moves, so that p and n of
-    # Eq. (24)-(25) carry the same strain (issue 13: a basal particle compacted while the
-    # filter erased the pressure that resisted it)
-    pressure_filter_porosity: bool = True
+    # the porosity takes the strain the pressure filter (Eq. 46) moves, as if the filter
+    # were a strain and not an exchange of pore water between neighbours. A tried variant
+    # (issue 13, README cause 12), off: with ponding it is a ratchet at the free surface
+    # (the filter raises a surface particle's p and compacts it, the clip p <= 0 removes
+    # the p and keeps the compaction): K0 = 0.5 at 40 s, 365 particles below the flow
+    # rule's porosity bound against 83 without it
+    pressure_filter_porosity: bool = False
     # artificial stress in C_ij of Eq. (26) (refs. [11, 18]): epsilon and exponent n;
     # default epsilon: 0.5 for Drucker-Prager soil, 0 (off) for elastic
     artificial_stress: Annotated[float, Field(ge=0.0)] | None = None

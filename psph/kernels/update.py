@@ -103,7 +103,10 @@ def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol
     by (1 - n) div v; the Shepard filter changes p by dp without a strain. Left so, a basal
     particle squeezed between two near-wall particles compacted in n (0.354 -> 0.304 in
     1 s) while the filter erased, every 30 steps, the pressure that resisted it (issue 13,
-    README). Here n += -(1 - n) n dp / K_l, the strain of dp. p_before: p before the filter."""
+    README). Here n += -(1 - n) n dp / K_l, the strain of dp. p_before: p before the filter.
+    Off by default (`stabilisation.pressure_filter_porosity`): read as an exchange of pore
+    water between neighbours, the filter moves no strain, and with the ponding clip this
+    version compacts free-surface particles (README cause 12)."""
     for i in range(n_owned):
         n_i = poro[i]
         dp = p[i] - p_before[i]

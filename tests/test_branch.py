@@ -1,0 +1,22 @@
+"""`python -m psph.io.branch`: a checkpoint copied with scene overrides continues under the
+new physics, which a plain restart refuses (exit 2)."""
+
+from psph import cli
+from psph.io.branch import main as branch
+
+RUN = ["--set", "time.end=3e-4", "--quiet"]
+
+
+def test_a_branched_checkpoint_restarts_with_other_physics(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert cli.main(["run", "terzaghi", "--out", str(out), "--set", "time.end=2e-4",
+                     "--quiet"]) == 0
+    ck = out / "checkpoint.h5"
+    other = ["--set", "stabilisation.shepard_every=5"]
+    assert cli.main(["run", "terzaghi", "--restart", str(ck), *other, *RUN]) == 2
+    assert "shepard_every" in capsys.readouterr().err
+    copy = tmp_path / "branch.h5"
+    assert branch([str(ck), str(copy), *other]) == 0
+    assert cli.main(["run", "terzaghi", "--restart", str(copy), *other, "--out",
+                     str(tmp_path / "branch"), *RUN]) == 0
+    assert branch([str(tmp_path / "missing.h5"), str(copy), *other]) == 2
