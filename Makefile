@@ -22,7 +22,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
-.PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability \
+.PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
 	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-field \
 	bench-field-window lint clean-env
 
@@ -71,6 +71,10 @@ bench-time-vs-error: env
 
 bench-stability: env
 	$(VPY) bench/stability.py
+
+# peak memory and set-up time per rank, 0.5M-2M particles on 1, 2 and 4 ranks (issue 15)
+bench-memory: env
+	$(VPY) bench/memory.py
 
 # strong (20k, 100k, 400k) and weak scaling 1 -> 2 ranks
 bench-scaling: env

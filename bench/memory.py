@@ -30,7 +30,8 @@ OUT = ROOT / "bench" / "out"
 FULL = {"dx": (0.004, 0.0028, 0.002), "ranks": (1, 2, 4)}
 QUICK = {"dx": (0.01, 0.007), "ranks": (1, 2)}
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-           "OMPI_MCA_rmaps_base_oversubscribe": "1", "NUMBA_NUM_THREADS": "1"}
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "NUMBA_NUM_THREADS": "1"}
 
 
 def run_case(dx: float, ranks: int) -> dict:

@@ -86,13 +86,13 @@ def run_checks(out: Path) -> dict:
     for k, t in enumerate(marks[:-1]):
         t_next = min(marks[k + 1] - 1.0, float(times[-1]))
         stats = []
-        for tt in (t, t_next):
+        for which, tt in enumerate((t, t_next)):
             s = snaps[int(np.argmin(np.abs(times - tt)))]
             debris = np.linalg.norm(s["u"], axis=1) > DEBRIS_DX * dx
             ex = excess_pressure(s, scene)
             stats.append({"time_s": float(s["time"]), "particles": int(debris.sum()),
                           **_median_p95(ex[debris])})
-            if tt == t:
+            if which == 0:
                 ids_at = s["id"][debris]
             else:  # the same particles later: their own dissipation, without the
                 # freshly sheared soil that joined the debris since

@@ -1,5 +1,6 @@
 """Command line (DESIGN.md): run, list, validate, plot, export. Exit codes: 0 done, 1 other
-error, 2 bad input, 3 numerical failure, 75 stopped by a signal after writing a checkpoint
+error, 2 bad input, 3 numerical failure, 74 output file system full (the last checkpoint
+named), 75 stopped by a signal after writing a checkpoint
 (rerun with --restart). Only rank 0 prints. Nothing numerical here."""
 
 import argparse
@@ -74,14 +75,9 @@ def main(argv: list[str] | None = None) -> int:
         if rank0:
             print(f"psph: numerical failure: {e}", file=sys.stderr)
         return 3
-    except OutputError as e:
-        if rank0 or not e.collective:
-            print(f"psph: error: {e}", file=sys.stderr, flush=True)
-        if not e.collective:
-            from mpi4py import MPI
-
-            if MPI.COMM_WORLD.Get_size() > 1:  # the other ranks may wait in the write
-                MPI.COMM_WORLD.Abort(OutputError.exit_code)
+    except OutputError as e:  # raised by every rank together (psph/io/space.py)
+        if rank0:
+            print(f"psph: error: {e}", file=sys.stderr)
         return OutputError.exit_code
     except Interrupted as e:
         if rank0:

@@ -27,12 +27,6 @@ class OutputError(Exception):
 
     exit_code = 74
 
-    def __init__(self, message: str, collective: bool = True):
-        super().__init__(message)
-        # raised by every rank together (the space check), or by one rank's failed write,
-        # which may leave the others inside a collective
-        self.collective = collective
-
 
 # Stop signals that arrive outside a run (while Python imports, or after the run has
 # finished and restored its handlers): recorded, never the default action, which would

@@ -4,6 +4,7 @@ import json
 import math
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -94,9 +95,9 @@ def run(scene: Scene, out: Path, comm=None, quiet: bool = False,
 
 
 def check_output_directory(out: Path, comm) -> None:
-    """Rank 0 creates `out` and writes and removes a probe file in it; if either fails,
-    every rank raises SceneError (exit 2) with one line naming the directory and the
-    cause, before any work (collective)."""
+    """Rank 0 creates `out`, writes and removes a probe file in it and removes a stale
+    `checkpoint.h5.tmp`; if that fails, every rank raises SceneError (exit 2) with one
+    line naming the directory and the cause, before any work (collective)."""
     problem = None
     if comm.Get_rank() == 0:
         try:
@@ -104,6 +105,8 @@ def check_output_directory(out: Path, comm) -> None:
             probe = out / f".psph-write-test-{os.getpid()}"
             probe.write_bytes(b"")
             probe.unlink()
+            # a checkpoint write cut short (the rename is its commit): never valid
+            (out / "checkpoint.h5.tmp").unlink(missing_ok=True)
         except OSError as e:
             problem = f"--out {out}: cannot create or write the output directory " \
                       f"({e.strerror or type(e).__name__}{': ' + e.filename if e.filename else ''})"
@@ -167,18 +170,36 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         return (f"the last complete checkpoint is {path} (step {step}, t = {t:.6g} s): "
                 f"free space, then continue with --restart {path}")
 
+    def write_failed(path: Path, e: OSError) -> None:
+        """A write failed on this rank (a quota the file system does not report): the
+        half-written `.tmp` goes, one line names the file and the hint, and on several
+        ranks MPI_Abort stops them all here, since the others may already wait inside
+        a collective close or barrier that this rank will never reach."""
+        tmp = path.with_name(path.name + ".tmp")
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        message = f"cannot write {path}: {e.strerror or e}; {resume_hint()}"
+        if comm.Get_size() == 1:
+            raise OutputError(message) from None
+        print(f"psph: error: {message}", file=sys.stderr, flush=True)
+        comm.Abort(OutputError.exit_code)
+
     def guarded_write(path: Path, nbytes: int, write) -> None:
-        """The space check, then the collective write; an OSError in it (a quota the
-        file system does not report) becomes OutputError with the same hint."""
+        """The space check (collective), then the write."""
         require_space(path, nbytes, comm, resume_hint())
         try:
             write()
         except OSError as e:
-            tmp = path.with_name(path.name + ".tmp")
-            if rank0 and tmp.exists():
-                tmp.unlink()
-            raise OutputError(f"cannot write {path}: {e}; {resume_hint()}",
-                              collective=False) from None
+            write_failed(path, e)
+
+    def side_files_bytes() -> int:
+        """Rank 0's rewrite of history.csv and particles.xdmf at each snapshot (the
+        CSV is written whole each time; 1.2 kB of XDMF per snapshot)."""
+        csv = out / "history.csv"
+        return (csv.stat().st_size if csv.exists() else 0) + 80 * len(history) \
+            + 1200 * (len(writer.entries) + 1)
     from psph.progress import Progress
 
     progress = Progress(end, enabled=rank0 and not quiet, start_time=sim.t)
@@ -187,13 +208,20 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
 
     def snapshot():
         slabs.check_census(sim.store, sim.alive, sim.step, sim.t)
-        guarded_write(out / "particles.h5", sim.n_global * SNAPSHOT_ROW_BYTES,
+        side = side_files_bytes() if rank0 else 0
+        guarded_write(out / "particles.h5", sim.n_global * SNAPSHOT_ROW_BYTES + side,
                       lambda: writer.write(sim.step, sim.t, sim.store))
         if monitor is not None:
             monitor.snapshot(sim)
         if rank0:
-            write_xdmf(out / "particles.xdmf", "particles.h5", writer.entries, scene.dim)
-            _write_history(out / "history.csv", history)  # readable if the run stops
+            for path, write in (
+                    (out / "particles.xdmf", lambda p: write_xdmf(
+                        p, "particles.h5", writer.entries, scene.dim)),
+                    (out / "history.csv", lambda p: _write_history(p, history))):
+                try:
+                    write(path)  # history.csv: readable if the run stops
+                except OSError as e:
+                    write_failed(path, e)
 
     def diagnostics():
         row = _history_row(sim, probes)
@@ -265,9 +293,19 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
             snapshot()
         if ck.at_end:
             checkpoint()
+    except OutputError:
+        try:  # the file system is full: closing may fail too, the line above says why
+            writer.close()
+        except OSError:
+            pass
+        raise
+    except BaseException:
+        writer.close()
+        raise
+    else:
+        writer.close()
     finally:
         progress.close()
-        writer.close()
 
     return _finish(sim, slabs, out, history, setup_seconds, time.perf_counter() - loop0,
                    monitor, "finished", restart)

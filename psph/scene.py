@@ -551,8 +551,11 @@ RESTART_MUTABLE = ("description", "time.end", "output", "checkpoint", "decomposi
 
 def check_restart_scene(saved_toml: str, scene: Scene, label: str) -> None:
     """A restart continues the same physics: every key outside RESTART_MUTABLE must equal
-    the checkpoint's. Raises SceneError naming the first key that differs."""
-    saved = _flatten(tomllib.loads(saved_toml))
+    the checkpoint's. Raises SceneError naming the first key that differs. The saved scene
+    is validated first, so a key added since the checkpoint was written (whose default
+    keeps the old behaviour) compares as its default."""
+    saved = _flatten(resolve(validate(tomllib.loads(saved_toml), label))
+                     .model_dump(exclude_none=True))
     now = _flatten(scene.model_dump(exclude_none=True))
     for key in sorted(set(saved) | set(now)):
         if any(key == m or key.startswith(m + ".") for m in RESTART_MUTABLE):

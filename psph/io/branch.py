@@ -6,7 +6,9 @@ so that `psph run --restart COPY --set ...` continues the same state under other
     mpirun -n 2 .venv/bin/python -m psph run SCENE --restart BRANCH.h5 \\
         --set stabilisation.shepard_every=0 --out OUT2
 
-The copy is a different run: its physics changed at the checkpoint's time.
+The copy is a different run: its physics changed at the checkpoint's time. Overrides of
+the set-up (particle spacing, geometry) are accepted but meaningless: the state is the
+checkpoint's.
 """
 
 from __future__ import annotations
@@ -50,7 +52,13 @@ def main(argv: list[str] | None = None) -> int:
         from psph.io.checkpoint import read_checkpoint
 
         read_checkpoint(args.checkpoint)  # a complete psph checkpoint, or one clear line
+        if args.branch.resolve() == args.checkpoint.resolve():
+            raise SceneError(f"{args.branch}: the branch must be a new file, not the "
+                             "checkpoint itself")
         branch_checkpoint(args.checkpoint, args.branch, args.set)
+    except OSError as e:
+        print(f"psph: error: {args.branch}: {e.strerror or e}", file=sys.stderr)
+        return 2
     except SceneError as e:
         print(f"psph: error: {e}", file=sys.stderr)
         return 2

@@ -244,9 +244,10 @@ def _fmt(v, scale: float = 1.0, spec: str = ".1f") -> str:
 
 
 def _where_largest(snap: dict, scene) -> str:
-    """One line: sign, extent and bottom-row share of the particles in the top 1 % of
-    |excess p| of a snapshot, and the 99th percentile of |excess| in and above the two
-    bottom rows (y < 1.5 dx above the domain's floor)."""
+    """One line: sign, extent and share near the floor of the particles in the top 1 % of
+    |excess p| of a snapshot, and the 99th percentile of |excess| within 1.5 dx of the
+    domain's floor (the bottom row, at 0.5 dx, and particles sunk below the second row's
+    1.5 dx) and above it."""
     ex = excess_pressure(snap, scene)
     a = np.abs(ex)
     top = a >= np.percentile(a, 99)
@@ -255,9 +256,12 @@ def _where_largest(snap: dict, scene) -> str:
     return (f"t = {snap['time']:.3g} s, top 1 % of |excess| ({int(top.sum())} particles): "
             f"{int((ex[top] > 0).sum())} positive, {int((ex[top] < 0).sum())} negative; "
             f"x {x[top].min():.2f}..{x[top].max():.2f} m, y {y[top].min():.2f}..{y[top].max():.2f}"
-            f" m; {100 * base[top].mean():.0f} % in the two bottom rows; p99 of |excess| "
-            f"there {np.percentile(a[base], 99) / 1e3:.1f} kPa, above "
-            f"{np.percentile(a[~base], 99) / 1e3:.1f} kPa")
+            f" m; {100 * base[top].mean():.0f} % within 1.5 dx of the floor; p99 of |excess| "
+            f"there {_p99_kpa(a[base])}, above {_p99_kpa(a[~base])}")
+
+
+def _p99_kpa(a: np.ndarray) -> str:
+    return f"{np.percentile(a, 99) / 1e3:.1f} kPa" if len(a) else "- (none)"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -277,7 +281,8 @@ def main(argv: list[str] | None = None) -> int:
                     "different lengths at one time)")
     ap.add_argument("--where", action="store_true",
                     help="also say where the top 1 %% of |excess| sits at the last snapshot "
-                    "used: its sign, extent, and how much of it is in the two bottom rows")
+                    "used: its sign, extent, and how much of it is within 1.5 dx of the "
+                    "floor")
     args = ap.parse_args(argv)
     print(f"{'run':<32} {'t_end':>6} {'min_ex':>9} {'max_ex':>9} {'p1_ex':>9} {'p99_ex':>9}"
           f" {'abs_p99':>9} {'cb_p_deb':>8} {'cb_pe_deb':>9}   (excess p in kPa: min, max, "
