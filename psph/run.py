@@ -121,6 +121,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
 
     comm = MPI.COMM_WORLD if comm is None else comm
     out = Path(out)
+    wall0 = time.perf_counter()  # set-up: checkpoint read, slab cuts, particles, ghosts
     meta, state = None, None
     if restart is not None:  # read and check before anything is written
         meta, state = read_checkpoint(restart)
@@ -134,7 +135,6 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         (out / "scene.toml").write_text(toml_text)
     comm.Barrier()
 
-    wall0 = time.perf_counter()
     if meta is None:
         sim = Simulation(scene, slabs)
     else:
