@@ -62,12 +62,22 @@ class MeshGeometry(_Model):
     file: str
 
 
+class Layer(_Model):
+    """Soil between two ground profiles of a cross-section (issue 16): the domain lattice
+    points with bottom(x) <= z <= top(x). Each profile is [[x, z], ...] strictly
+    increasing in x, or the path of a CSV file of x, z rows (psph/scenes/profiles.py)."""
+
+    top: list[Vec2] | str
+    bottom: list[Vec2] | str
+
+
 class Particles(_Model):
     dx: Pos
     h_factor: Annotated[float, Field(ge=1.0, le=2.0)] = 1.2  # h = 1.2 dx (Section 3.1)
     blocks: list[Block] = []
     polygons: list[Polygon] = []
     meshes: list[MeshGeometry] = []
+    layers: list[Layer] = []
 
 
 class Plasticity(_Model):
@@ -283,10 +293,12 @@ class Scene(_Model):
             if hi[d] <= lo[d]:
                 raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
         pa = self.particles
-        if not (pa.blocks or pa.polygons or pa.meshes):
-            raise _Rule("particles", "no blocks, polygons or meshes",
-                        "give at least one [[particles.blocks]], [[particles.polygons]] or "
-                        "[[particles.meshes]]")
+        if not (pa.blocks or pa.polygons or pa.meshes or pa.layers):
+            raise _Rule("particles", "no blocks, polygons, meshes or layers",
+                        "give at least one [[particles.blocks]], [[particles.polygons]], "
+                        "[[particles.meshes]] or [[particles.layers]]")
+        for il, layer in enumerate(pa.layers):
+            check_layer_profiles(layer, f"particles.layers[{il}]")
         for ip, poly in enumerate(pa.polygons):
             for iv, v in enumerate(poly.vertices):
                 for d in range(2):
@@ -405,6 +417,26 @@ class Scene(_Model):
     @property
     def h(self) -> float:
         return self.particles.h_factor * self.particles.dx
+
+
+def check_layer_profiles(layer: Layer, key: str):
+    """Both profiles readable and increasing in x, the bottom nowhere above the top;
+    returns their (k, 2) points. Raises _Rule naming the key, the value and the rule."""
+    from psph.scenes.profiles import ProfileError, check_layer, read_profile
+
+    points = {}
+    for side in ("top", "bottom"):
+        value = getattr(layer, side)
+        try:
+            points[side] = read_profile(value)
+        except ProfileError as e:
+            where = f"{key}.{side}" + ("" if e.where in ("points", "file") else f" {e.where}")
+            raise _Rule(where, e.value, e.rule) from None
+    try:
+        check_layer(points["top"], points["bottom"])
+    except ProfileError as e:
+        raise _Rule(f"{key}.bottom", e.value, e.rule) from None
+    return points["top"], points["bottom"]
 
 
 class _Rule(ValueError):

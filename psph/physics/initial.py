@@ -17,16 +17,22 @@ _NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "to
 
 def soil_positions(scene) -> np.ndarray:
     """Particle positions: each block's own lattice, then the domain lattice points inside
-    the polygons and meshes (each point once, in that order)."""
+    the polygons, meshes and layers (each point once, in lattice order)."""
     dx = scene.particles.dx
     parts = [lattice_block(b.min, b.max, dx) for b in scene.particles.blocks]
-    if scene.particles.polygons or scene.particles.meshes:
+    pa = scene.particles
+    if pa.polygons or pa.meshes or pa.layers:
+        from psph.scene import check_layer_profiles
+        from psph.scenes.profiles import inside_layer
+
         grid = domain_lattice(scene.domain.min, scene.domain.max, dx)
         taken = np.zeros(len(grid), bool)
-        for poly in scene.particles.polygons:
+        for poly in pa.polygons:
             taken |= inside_polygon(grid, poly.vertices)
-        for mesh in scene.particles.meshes:
+        for mesh in pa.meshes:
             taken |= inside_mesh(grid, mesh.file)
+        for il, layer in enumerate(pa.layers):
+            taken |= inside_layer(grid, *check_layer_profiles(layer, f"particles.layers[{il}]"))
         parts.append(grid[taken])
     return np.concatenate(parts)
 

@@ -1,0 +1,91 @@
+"""Ground profiles of a cross-section (issue 16): a polyline z(x) given inline as [x, z]
+points or as a CSV file of x, z rows (the way survey sections come), and the soil layer
+between a top and a bottom profile.
+
+A profile is strictly increasing in x; between its points it is linear, outside its x
+range it does not exist. A layer holds the lattice points with bottom(x) <= z <= top(x)
+where both profiles exist.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+class ProfileError(ValueError):
+    """A profile that cannot be used: `where` (an index, a row or an x) and the rule."""
+
+    def __init__(self, where: str, value, rule: str):
+        super().__init__(f"{where}: {rule}")
+        self.where, self.value, self.rule = where, value, rule
+
+
+def read_profile(value: list | str) -> np.ndarray:
+    """(k, 2) points of a profile given as [[x, z], ...] or as the path of a CSV file
+    with one x, z pair per row (a header row and `#` comments are skipped)."""
+    if isinstance(value, str):
+        path = Path(value)
+        if not path.is_file():
+            raise ProfileError("file", value, "no such file")
+        rows = []
+        for n, line in enumerate(path.read_text().splitlines(), start=1):
+            text = line.split("#", 1)[0].strip()
+            if not text:
+                continue
+            cells = [c.strip() for c in text.replace(";", ",").split(",")]
+            try:
+                xz = [float(c) for c in cells]
+            except ValueError:
+                if not rows:  # a header
+                    continue
+                raise ProfileError(f"{value} line {n}", line, "not two numbers x, z") \
+                    from None
+            if len(xz) != 2:
+                raise ProfileError(f"{value} line {n}", line, "not two numbers x, z")
+            rows.append(xz)
+        points = np.array(rows, float).reshape(-1, 2)
+    else:
+        points = np.asarray(value, float).reshape(-1, 2)
+    if len(points) < 2:
+        raise ProfileError("points", len(points), "a profile needs at least 2 points")
+    if not np.all(np.isfinite(points)):
+        raise ProfileError("points", "non-finite", "coordinates must be finite")
+    bad = np.flatnonzero(np.diff(points[:, 0]) <= 0.0)
+    if len(bad):
+        i = int(bad[0]) + 1
+        raise ProfileError(f"point {i}", points[i].tolist(),
+                           f"x must increase along the profile (x = {points[i, 0]:g} after "
+                           f"{points[i - 1, 0]:g}): not monotonic in x")
+    return points
+
+
+def check_layer(top: np.ndarray, bottom: np.ndarray) -> None:
+    """The two profiles share an x range and the bottom is nowhere above the top there
+    (checked at every point of either profile)."""
+    x0, x1 = max(top[0, 0], bottom[0, 0]), min(top[-1, 0], bottom[-1, 0])
+    if x1 <= x0:
+        raise ProfileError("bottom", [bottom[0, 0], bottom[-1, 0]],
+                           f"no x range in common with the top ([{top[0, 0]:g}, "
+                           f"{top[-1, 0]:g}])")
+    xs = np.unique(np.concatenate([top[:, 0], bottom[:, 0]]))
+    xs = xs[(xs >= x0) & (xs <= x1)]
+    gap = np.interp(xs, top[:, 0], top[:, 1]) - np.interp(xs, bottom[:, 0], bottom[:, 1])
+    scale = max(np.ptp(top[:, 1]), np.ptp(bottom[:, 1]), 1.0)
+    if np.any(gap < -1e-9 * scale):
+        i = int(np.argmin(gap))
+        raise ProfileError("bottom", float(xs[i]),
+                           f"above the top at x = {xs[i]:g} (by {-gap[i]:g} m)")
+
+
+def inside_layer(points: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+    """Mask of the points between the profiles: bottom(x) <= z <= top(x) (to a relative
+    1e-9, as `inside_polygon` counts edges), within both profiles' x range."""
+    x, z = points[:, 0], points[:, 1]
+    eps = 1e-9 * max(np.ptp(np.concatenate([top, bottom]), axis=0).max(), 1.0)
+    x0, x1 = max(top[0, 0], bottom[0, 0]), min(top[-1, 0], bottom[-1, 0])
+    within = (x >= x0 - eps) & (x <= x1 + eps)
+    zt = np.interp(x, top[:, 0], top[:, 1])
+    zb = np.interp(x, bottom[:, 0], bottom[:, 1])
+    return within & (z >= zb - eps) & (z <= zt + eps)
