@@ -234,8 +234,10 @@ class Initial(_Model):
     table, and the K0 procedure for the effective stress under gravity."""
 
     # m (elevation y): p = rho_l |g| (y_wt - y) below it; "surface": the water table
-    # follows the ground surface (p = rho_l |g| depth below the top of each column)
-    water_table: float | Literal["surface"] | None = None
+    # follows the ground surface (p = rho_l |g| depth below the top of each column); a
+    # phreatic profile (issue 16): [[x, z], ...] or a CSV path, z_w(x) linear between its
+    # points and held at its end values beyond them; p = 0 above it
+    water_table: float | Literal["surface"] | list[Vec2] | str | None = None
     k0: Annotated[float, Field(gt=0.0)] | None = None  # sigma'_h = K0 sigma'_v; none: zero
     # s of gravity loading before t = 0 (Section 4.5): the skeleton relaxes from the K0
     # state to equilibrium under free faces, with p held hydrostatic and global damping
@@ -333,6 +335,15 @@ class Scene(_Model):
         if self.material.model == "elastic" and self.material.plasticity is not None:
             raise _Rule("material.model", "elastic",
                         "material.plasticity is given: set model = 'drucker_prager'")
+        table = self.initial.water_table
+        if isinstance(table, list) or (isinstance(table, str) and table != "surface"):
+            from psph.scenes.profiles import ProfileError, read_profile
+
+            try:
+                read_profile(table)
+            except ProfileError as e:
+                where = "" if e.where in ("points", "file") else f" {e.where}"
+                raise _Rule(f"initial.water_table{where}", e.value, e.rule) from None
         if (self.initial.k0 is not None or self.initial.water_table is not None) \
                 and self.gravity[1] >= 0.0:
             key = "initial.k0" if self.initial.k0 is not None else "initial.water_table"

@@ -100,3 +100,38 @@ def test_a_csv_row_that_is_not_two_numbers_names_its_line(tmp_path):
     r = _run(_scene(tmp_path, str(csv), BOTTOM))
     assert r.returncode == 2
     assert "line 3" in r.stderr and "not two numbers" in r.stderr
+
+
+PHREATIC = [[0.0, 6.0], [10.0, 5.0], [20.0, 3.5]]  # below ground: 8 m at the left, 4 m right
+
+
+@pytest.mark.parametrize("as_csv", [False, True])
+def test_a_phreatic_profile_gives_hydrostatic_p_below_it_and_none_above(tmp_path, as_csv):
+    """issue 16, item 4: p = rho_l g (z_w(x) - z) below the phreatic surface, 0 above."""
+    from psph.physics.initial import initial_particles
+
+    table = PHREATIC
+    if as_csv:
+        table = tmp_path / "phreatic.csv"
+        table.write_text("x,z\n" + "\n".join(f"{a},{b}" for a, b in PHREATIC) + "\n")
+        table = f'"{table}"'
+    path = _scene(tmp_path, TOP, BOTTOM)
+    path.write_text(path.read_text()
+                    .replace('name = "section"', 'name = "section"\ngravity = [0.0, -9.81]')
+                    .replace('[time]', f'[initial]\nk0 = 0.5\nwater_table = {table}\n[time]'))
+    data = initial_particles(load_scene(str(path)))
+    x = data["x"]
+    z_w = np.interp(x[:, 0], *np.array(PHREATIC).T)
+    expect = 1000.0 * 9.81 * np.maximum(z_w - x[:, 1], 0.0)
+    assert np.allclose(data["p"], expect, rtol=1e-12, atol=1e-9)
+    assert (x[:, 1] > z_w).sum() > 100 and (data["p"][x[:, 1] > z_w] == 0.0).all()
+
+
+def test_a_phreatic_profile_not_monotonic_in_x_exit_2(tmp_path):
+    path = _scene(tmp_path, TOP, BOTTOM)
+    path.write_text(path.read_text().replace('name = "section"', 'name = "section"\n'
+                    'gravity = [0.0, -9.81]').replace(
+        '[time]', '[initial]\nwater_table = [[0.0, 6.0], [0.0, 5.0]]\n[time]'))
+    r = _run(path)
+    assert r.returncode == 2
+    assert "initial.water_table point 1" in r.stderr and "not monotonic" in r.stderr

@@ -105,9 +105,22 @@ def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
     data["p_prev"] = data["p"].copy()
 
 
+def table_elevation(table, x: np.ndarray) -> np.ndarray:
+    """Elevation of a water table given as a level (m) or as a phreatic profile
+    ([[x, z], ...] or a CSV path, psph/scenes/profiles.py) at the abscissae x: linear
+    between the profile's points, held at its end values beyond them."""
+    if isinstance(table, (int, float)):
+        return np.full(len(x), float(table))
+    from psph.scenes.profiles import read_profile
+
+    points = read_profile(table)
+    return np.interp(x, points[:, 0], points[:, 1])
+
+
 def geostatic(scene, data: dict[str, np.ndarray]) -> None:
-    """Hydrostatic pore pressure below `initial.water_table` (an elevation, or "surface":
-    zero at the centres of each column's top particle) and the K0 effective stress
+    """Hydrostatic pore pressure below `initial.water_table` (an elevation, a phreatic
+    profile, or "surface": zero at the centres of each column's top particle) and the K0
+    effective stress
     (sigma'_v from the weight of the soil above, sigma'_h = sigma'_zz = K0 sigma'_v), in
     place. The ground surface above a particle is the top of its particle column.
 
@@ -127,7 +140,7 @@ def geostatic(scene, data: dict[str, np.ndarray]) -> None:
     depth = top[column - column.min()] + 0.5 * dx - x[:, 1]
     if init.water_table is not None:
         head = depth - 0.5 * dx if init.water_table == "surface" \
-            else init.water_table - x[:, 1]
+            else table_elevation(init.water_table, x[:, 0]) - x[:, 1]
         p = scene.material.rho_l * g * np.maximum(head, 0.0)
         if scene.pressure.drained_boundary == "layer":
             p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0),

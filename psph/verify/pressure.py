@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from psph.physics.initial import table_elevation
+
 ALPHA_2D = 15.0 / (7.0 * math.pi)  # normalisation of Eq. (21) in 2D, times 1/h^2
 DEBRIS_DX = 5.0  # a particle that moved more than this many dx is "debris"
 PERCENTILES = (1, 5, 50, 95, 99)
@@ -65,7 +67,8 @@ def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | N
       its current surface. The centre, not the top (y + dx/2), is the convention of the
       initial state (psph/physics/initial.py: p = 0 at the top particle's centre), so a
       column at rest has zero excess pressure.
-    - a number (an elevation): that level, but never above the current ground surface of
+    - a number (an elevation) or a phreatic profile (its elevation at the particle's
+      current x, `table_elevation`): that level, but never above the current ground surface of
       the particle's column: water does not stand above the soil in this model (ponding
       keeps p <= 0 on the free surface), so where the mass has spread below the level
       (the debris of the Section 4.4 collapse) the table follows the surface. Before the
@@ -82,7 +85,8 @@ def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | N
     gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
     surface = ground_surface(x, scene.particles.dx) if surface_y is None \
         else np.broadcast_to(np.asarray(surface_y, dtype=float), (len(x),))
-    y_w = surface if table == "surface" else np.minimum(float(table), surface)
+    y_w = surface if table == "surface" else np.minimum(table_elevation(table, x[:, 0]),
+                                                        surface)
     return gamma * np.maximum(y_w - x[:, 1], 0.0)
 
 
@@ -234,7 +238,8 @@ def pressure_quality(snaps: list[dict], scene) -> dict:
             over[f"{k}_max"] = max(vals) if vals else None
             over[f"{k}_last"] = series[k][-1]
     table = scene.initial.water_table
-    return {"water_table": table if table is None or isinstance(table, str) else float(table),
+    return {"water_table": table if table is None or isinstance(table, (str, list))
+            else float(table),
             "debris_moved_more_than_m": DEBRIS_DX * scene.particles.dx,
             "h_m": scene.h, "over_run": over, "series": series}
 
