@@ -13,6 +13,7 @@ Long run: the same column with the `terzaghi` settings (alpha = 0.5, dt = 5e-6 s
 
     .venv/bin/python bench/stability.py          # ~10 min on this machine
     .venv/bin/python bench/stability.py --plot-only
+    .venv/bin/python bench/stability.py --projection   # the R row with the projection
 
 Writes bench/out/stability.json and bench/out/stability.png.
 """
@@ -57,7 +58,12 @@ def _run(overrides: list[str]) -> tuple[dict | None, dict, str | None]:
     return summary, {k: rows[:, i] for i, k in enumerate(keys)}, None
 
 
-def map_case(R: float, alpha: float) -> dict:
+# the pressure projection instead of TPI (issue 14): one solve per step, the loading too
+PROJECTION = ["pressure.scheme='projection'", "time.integrator='symplectic'",
+              "pressure.explicit_until=0.0"]
+
+
+def map_case(R: float, alpha: float, scheme: list[str] | None = None) -> dict:
     from psph.scene import fluid_dt_limit, load_scene
 
     # k such that dt_Eq42(k) = DT / R; Eq. (42) is proportional to 1/k
@@ -66,8 +72,8 @@ def map_case(R: float, alpha: float) -> dict:
     end = 0.001 + N_TPI * DT
     ov = COLUMN + [f"material.k={k!r}", f"time.dt={DT}", f"pressure.alpha={alpha}",
                    f"time.end={end!r}", f"output.history_interval={20 * DT!r}"]
-    summary, hist, failure = _run(ov)
-    rec = {"R": R, "alpha": alpha, "k": k}
+    summary, hist, failure = _run(ov + (scheme or []))
+    rec = {"R": R, "alpha": alpha, "k": k, "scheme": "projection" if scheme else "tpi"}
     if failure:
         return rec | {"stable": False, "reason": "numerical failure", "detail": failure}
     p = hist["p_base"][hist["time"] > 0.0015]
@@ -142,11 +148,33 @@ def plot(data: dict, path: Path) -> None:
     plt.close(fig)
 
 
+def projection_map() -> None:
+    """The map's R row with the projection: the same column, dt, loading and checks."""
+    rows = []
+    print(f"{'R':>5}  verdict (projection)")
+    for R in R_VALUES:
+        r = map_case(R, 0.0, PROJECTION)
+        rows.append(r)
+        verdict = "stable" if r["stable"] else f"UNSTABLE ({r['reason']})"
+        print(f"{R:5.0f}  {verdict}  p_max/q {r.get('p_max', float('nan')) / Q:.3f}",
+              flush=True)
+    path = OUT / "stability-projection.json"
+    path.write_text(json.dumps({"date": date.today().isoformat(),
+                                "machine": platform.node(), "map": rows}, indent=2) + "\n")
+    print(f"wrote {path}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--projection", action="store_true",
+                    help="the map's R row with the pressure projection (no alpha, no long "
+                         "run); writes stability-projection.json")
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
+    if args.projection:
+        projection_map()
+        return
     jpath, ppath = OUT / "stability.json", OUT / "stability.png"
     if args.plot_only:
         plot(json.loads(jpath.read_text()), ppath)
