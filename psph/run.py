@@ -100,6 +100,7 @@ def check_output_directory(out: Path, comm) -> None:
     line naming the directory and the cause, before any work (collective)."""
     problem = None
     if comm.Get_rank() == 0:
+        created = [d for d in (out, *out.parents) if not d.exists()]
         try:
             out.mkdir(parents=True, exist_ok=True)
             probe = out / f".psph-write-test-{os.getpid()}"
@@ -107,6 +108,8 @@ def check_output_directory(out: Path, comm) -> None:
             probe.unlink()
             # a checkpoint write cut short (the rename is its commit): never valid
             (out / "checkpoint.h5.tmp").unlink(missing_ok=True)
+            for d in created:  # leaf first: bad input found later leaves nothing behind
+                d.rmdir()
         except OSError as e:
             problem = f"--out {out}: cannot create or write the output directory " \
                       f"({e.strerror or type(e).__name__}{': ' + e.filename if e.filename else ''})"
