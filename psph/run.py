@@ -17,7 +17,8 @@ from psph.io.snapshots import SnapshotWriter, write_xdmf
 from psph.io.space import SNAPSHOT_ROW_BYTES, require_space
 from psph.kernels.update import SCHEME_NONE, SCHEME_PROJECTION
 from psph.physics.initial import initial_particles
-from psph.scene import Scene, check_restart_scene, to_toml
+from psph.restart_rules import check_restart_scene
+from psph.scene import Scene, to_toml
 from psph.solver import Simulation
 from psph.verify import reference_times
 from psph.verify.errors import TerzaghiMonitor
