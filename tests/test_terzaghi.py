@@ -51,7 +51,7 @@ def _check(summary):
 
 @pytest.mark.slow
 def test_tpi_alpha_half_at_R17(tmp_path):
-    scene = load_scene("terzaghi", COARSE)
+    scene = load_scene("terzaghi", COARSE + ["pressure.alpha=0.5"])
     st = time_stepping(scene)
     R = st.dt_main / st.limits["dt_fluid_eq42"]
     assert 16 < R < 19
@@ -113,7 +113,8 @@ def test_explicit_and_tpi_agree_at_the_explicit_dt(tmp_path):
     (-2.3 % / -1.1 % then) had absorbed. The pressure check stays at both times."""
     from psph.io.snapshots import read_snapshots
 
-    common = COARSE[:2] + ["verification.tv=[]", "time.end=0.03", "output.times=[0.02]"]
+    common = COARSE[:2] + ["verification.tv=[]", "time.end=0.03", "output.times=[0.02]",
+                           "pressure.alpha=0.5"]  # the paper's Fig. 3 setting
     common.append(f"time.dt={fluid_dt_limit(load_scene('terzaghi', common))!r}")
     last = {}
     for scheme in ("explicit", "tpi"):
