@@ -160,6 +160,11 @@ class Pressure(_Model):
     # where a drained side holds p = 0: "mirror" on its true surface (antisymmetric
     # ghosts or images, psph/drainage.py), "layer" on its outer particle layer, dx/2 inside
     drained_boundary: Literal["mirror", "layer"] = "mirror"
+    # the pore pressure in the momentum Eq. (26): "pair", in the pair's total stress as the
+    # paper writes it; as -grad p / rho from pressure differences, "difference" (plain
+    # kernel gradient / m0) or "gradient" (corrected, Eq. 22): a uniform p exerts no
+    # force on any arrangement (issue 13, cause 12); explicit and TPI only
+    momentum: Literal["pair", "difference", "gradient", "closure"] = "pair"
 
 
 class Time(_Model):
@@ -182,6 +187,9 @@ class Stabilisation(_Model):
     av_sound_speed: Literal["solid", "undrained"] = "solid"
     corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
     shepard_every: Annotated[int, Field(ge=0)] = 0  # m of Eq. (46): filter p every m steps
+    # particle shifting down the concentration gradient, A of D = A h^2 |grad v| dt
+    # (psph/kernels/shifting.py; issue 13, cause 12); 0: off
+    shifting: Annotated[float, Field(ge=0.0)] = 0.0
     # with the Shepard step, also filter the effective stress (stress regularisation, the
     # paper's ref. [14]): the odd-even mode of sigma' has no other damping (issue 13)
     shepard_stress: bool = False
@@ -359,6 +367,10 @@ class Scene(_Model):
         if self.pressure.scheme == "projection" and self.time.integrator != "symplectic":
             raise _Rule("pressure.scheme", "projection",
                         "needs time.integrator = 'symplectic' (the solve follows the kick)")
+        if self.pressure.momentum != "pair" and self.pressure.scheme not in ("explicit", "tpi"):
+            raise _Rule("pressure.momentum", self.pressure.momentum,
+                        "needs pressure.scheme 'explicit' or 'tpi' (the projection's velocity "
+                        "correction is pair-symmetric)")
         if self.time.end is None:
             if self.verification.reference == "none" or not self.verification.tv:
                 raise _Rule("time.end", None, "required (no verification.tv to derive it from)")

@@ -18,10 +18,21 @@ from psph.errors import NumericalError
 from psph.kernels.artificial_stress import artificial_stress
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.images import image_sums
-from psph.kernels.interactions import NSUMS, pair_sums, velocity_gradient_sums
+from psph.kernels.interactions import (
+    NSUMS,
+    pair_sums,
+    symmetric_gradient_sums,
+    velocity_gradient_sums,
+)
 from psph.kernels.laplacian import lattice_moment
 from psph.kernels.neighbours import bin_particles, grid_bounds
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
+from psph.kernels.shifting import (
+    FREE_TRACE,
+    SHIFT_CAP,
+    SURFACE_TRACE,
+    shift_particles,
+)
 from psph.kernels.spline import w_cubic
 from psph.kernels.update import (
     SCHEME_EXPLICIT,
@@ -30,6 +41,7 @@ from psph.kernels.update import (
     SCHEME_TPI,
     advance,
     kick,
+    pore_pressure_force,
     porosity_follows_pressure_filter,
     porosity_follows_stress_filter,
 )
@@ -124,6 +136,7 @@ class Simulation:
         self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h)  # F~ of Eq. (23)
         self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
         self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
+        self.scratch_shift = np.zeros((0, 4))  # grad C and the shift of `_shift`
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
@@ -132,6 +145,9 @@ class Simulation:
             else np.zeros(2)
         self.damping = self.soil.damping_coefficient(scene.stabilisation.damping, self.h)
         self.coupled = scene.pressure.scheme != "none"
+        # 0: the pore pressure enters Eq. (26) as a corrected gradient (pressure.momentum)
+        self.p_weight = {"pair": 1.0, "closure": 0.5}.get(scene.pressure.momentum, 0.0) \
+            if self.coupled else 1.0
         self.av_sound_speed = (self.soil.undrained_sound_speed
                                if self.coupled and scene.stabilisation.av_sound_speed
                                == "undrained" else self.soil.sound_speed)
@@ -143,7 +159,8 @@ class Simulation:
         self.ponding = {False: 0, True: 1, "drained": 2}[scene.pressure.ponding]
         # pairs of the last sweep, reused by the symplectic velocity sweep
         # (and by the mass-balance residual of the explicit and TPI pressure)
-        self.record_pairs = self.symplectic or self.coupled
+        self.shifting = scene.stabilisation.shifting
+        self.record_pairs = self.symplectic or self.coupled or self.shifting > 0.0
         n_pairs0 = 16 * self.store.cap if self.record_pairs else 0
         self.pairs = np.zeros((n_pairs0, 2), np.int64)
         self.pair_g = np.zeros((n_pairs0, 2))
@@ -191,6 +208,8 @@ class Simulation:
             pname = "explicit->tpi"
         model = ",drucker_prager" if self.plastic else ",elastic"
         stages.append(Stage(f"update[{pname}{model}]", self._update))
+        if self.shifting > 0.0:
+            stages.append(Stage("shifting", self._shift))
         return stages
 
     def state_bytes(self) -> int:
@@ -314,7 +333,8 @@ class Simulation:
                           sb.av_alpha, sb.av_beta,
                           self.av_sound_speed, rl * self.body[0], rl * self.body[1],
                           self.coupled, self.acc_term, self.sums, self.astress, as_n,
-                          self.w_dx, self.record_pairs, self.pairs, self.pair_g)
+                          self.w_dx, self.p_weight, self.record_pairs, self.pairs,
+                          self.pair_g)
             if n >= 0:
                 self.n_pairs = n
                 if self.coupled and self.drainage.has_planes:
@@ -326,6 +346,10 @@ class Simulation:
                 # the stress divergence of Eq. (26) has the same lattice moment: a
                 # uniform stress under a surface load balanced m0 q, not q (README)
                 self.sums[:st.n_owned, 23:25] *= self.lattice_norm
+                if self.p_weight < 1.0:
+                    pore_pressure_force(st.n_owned, self.sums, st.rho,
+                                        self.scene.pressure.momentum == "gradient",
+                                        self.lattice_norm, 1.0 - self.p_weight)
                 return
             grow = 2 * self.pairs.shape[0]
             self.pairs = np.zeros((grow, 2), np.int64)
@@ -362,6 +386,24 @@ class Simulation:
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
+        if len(self.wall_axis):
+            wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
+                         self.wall_sign)
+
+    def _shift(self) -> None:
+        """Particle shifting (`stabilisation.shifting`, psph/kernels/shifting.py) over the
+        pairs of this step's sweep, then the wall contact as after the update."""
+        st = self.store
+        if self.scratch_shift.shape[0] < st.cap:
+            self.scratch_shift = np.zeros((st.cap, 5))
+        half = self.scratch_shift[:, 4]
+        half.fill(0.5)  # grad C_i = sum_j V_j (1/2 + 1/2) grad_i W_ij
+        grad_c = self.scratch_shift[:, 0:2]
+        symmetric_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.vol,
+                                half, grad_c)
+        shift_particles(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
+                        SHIFT_CAP * self.scene.particles.dx, SURFACE_TRACE, FREE_TRACE,
+                        st.x, self.scratch_shift[:, 2:4])
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)

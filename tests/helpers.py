@@ -17,7 +17,7 @@ def jittered_lattice(n: int, dx: float, jitter: float, seed: int = 1) -> np.ndar
 
 def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=None,
              p_prev=None, alpha=0.0, coupled=True, n_owned=None, pairs=None, v_slip=None,
-             n_real=None):
+             n_real=None, p_weight=1.0):
     """The pair sums of `interactions.pair_sums` for particles at x; `pairs`: a tuple of
     (int (m, 2), float (m, 2)) arrays that receive the recorded pairs; then the number
     of pairs is returned with the sums."""
@@ -38,7 +38,7 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
         n, n if n_owned is None else n_owned, n if n_real is None else n_real, x, v, v_slip,
         stress, p, p_prev, poro, vol, rho, perm,
         z((n, 2)), cell_start, order, ncell, h, alpha, 0.0, 0.0, 1.0, 0.0, 0.0, coupled,
-        False, sums, z((n, 3)), 0.0, 1.0, pairs is not None, *record)
+        False, sums, z((n, 3)), 0.0, 1.0, p_weight, pairs is not None, *record)
     return sums if pairs is None else (sums, n_pairs)
 
 

@@ -171,8 +171,9 @@ def test_gravity_loading_and_stress_regularisation_one_vs_two_ranks_bitwise(
         tmp_path_factory):
     """Issue 13's paths across the slab cut: `initial.equilibrate` (gravity loading before
     t = 0), the Shepard step with the MLS stress filter of the slopes, the viscosity on
-    fixed-wall ghost pairs and the symplectic step, on the saturated clay block of the
-    basal-sliding test (its free ends fail plastically, so particles move)."""
+    fixed-wall ghost pairs, the symplectic step and particle shifting, on the saturated
+    clay block of the basal-sliding test (its free ends fail plastically, so particles
+    move and shift)."""
     from mpi4py import MPI
 
     from psph.verify.sliding import block_scene
@@ -181,7 +182,8 @@ def test_gravity_loading_and_stress_regularisation_one_vs_two_ranks_bitwise(
     out = shared_tmp(comm, tmp_path_factory)
     scene = block_scene(["initial.equilibrate=0.2", "stabilisation.shepard_every=5",
                          "stabilisation.shepard_stress=true",
-                         'stabilisation.stress_filter="mls"', "time.end=0.1",
+                         'stabilisation.stress_filter="mls"', "stabilisation.shifting=2.0",
+                         "time.end=0.1",
                          "output.interval=0.05"])
     _one_vs_two(comm, scene, out)
 

@@ -64,7 +64,7 @@ def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():
         got = pair_sums(n, n, n, x, z((n, 2)), z((n, 2)), z((n, 4)), z(n), z(n), np.full(n, 0.4),
                         np.full(n, dx * dx), np.ones(n), np.ones(n), z((n, 2)), cell_start,
                         order, ncell, h, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, True, False, sums,
-                        z((n, 3)), 0.0, 1.0, True, z((cap, 2), np.int64), z((cap, 2)))
+                        z((n, 3)), 0.0, 1.0, 1.0, True, z((cap, 2), np.int64), z((cap, 2)))
         out.append((got, sums))
     assert out[0][0] == -1 and out[1][0] > 3
     assert np.array_equal(out[0][1], out[1][1])

@@ -54,7 +54,7 @@ NSUMS = 29
 def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc,
               cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
               rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx,
-              record, pairs, pair_g):
+              p_weight, record, pairs, pair_g):
     """Accumulate the sums listed in the module docstring for particles 0..n_owned-1.
 
     n_real: rows n_real..n_total-1 are wall ghosts, whose `v_slip` (free-slip mirror)
@@ -63,6 +63,8 @@ def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, v
     acc_term: the div(k dv/dt) sums (Ga) are computed. rho_l_b = rho_l * body force (N/m^3).
     astress: (cap, 3) artificial stress R (xx, yy, xy) of every row, added to the pair
     stress with weight (W(r) / w_dx)^as_n (C_ij of Eq. 26); as_n = 0 switches it off.
+    p_weight: 1 puts the pore pressure in the pair's total stress (Eq. 26 as written); 0
+    leaves it out, for `update.pore_pressure_force` to add it as a corrected gradient.
     record: the visited pairs (a, b) and grad_a W_ab are written to pairs / pair_g in
     visiting order, for `velocity_gradient_sums`. Returns the number of pairs recorded,
     or -1 if `pairs` is too short (the sums are complete either way).
@@ -119,8 +121,9 @@ def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, v
                             ds0 = v_slip[b, 0] - v_slip[a, 0]
                             ds1 = v_slip[b, 1] - v_slip[a, 1]
                         # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
-                        sxx = stress[a, 0] + stress[b, 0] - p[a] - p[b]
-                        syy = stress[a, 1] + stress[b, 1] - p[a] - p[b]
+                        pab = p_weight * (p[a] + p[b])
+                        sxx = stress[a, 0] + stress[b, 0] - pab
+                        syy = stress[a, 1] + stress[b, 1] - pab
                         sxy = stress[a, 3] + stress[b, 3]
                         if as_n > 0.0:
                             fn = (w_cubic(r, h) / w_dx) ** as_n
@@ -292,3 +295,24 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
                 s[11] += wn * ds0 * g1
                 s[12] += wn * ds1 * g0
                 s[13] += wn * ds1 * g1
+
+
+@nb.njit(cache=True)
+def symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, q, out):
+    """out_i = sum_j V_j (q_i + q_j) grad_i W_ij of owned particles over the pairs
+    `pair_sums` recorded, in their visiting order (partition-independent): the
+    pair-symmetric gradient of Eq. (26) for a scalar q (the projection's pressure
+    correction), and with q = 1/2 the concentration gradient of particle shifting."""
+    for i in range(n_owned):
+        out[i, 0] = 0.0
+        out[i, 1] = 0.0
+    for k in range(n_pairs):
+        a = pairs[k, 0]
+        b = pairs[k, 1]
+        f = q[a] + q[b]
+        if a < n_owned:
+            out[a, 0] += vol[b] * f * pair_g[k, 0]
+            out[a, 1] += vol[b] * f * pair_g[k, 1]
+        if b < n_owned:
+            out[b, 0] -= vol[a] * f * pair_g[k, 0]
+            out[b, 1] -= vol[a] * f * pair_g[k, 1]

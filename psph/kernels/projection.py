@@ -15,6 +15,7 @@ The right-hand side is the explicit rate of Eq. (25) times n / K_l.
 import numba as nb
 import numpy as np
 
+from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.update import _inverse_moment
 
 
@@ -73,22 +74,10 @@ def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: n
     """v_i += dt a_i and acc_i += a_i with a_i = -norm sum_j V_j (dp_i + dp_j) grad_i W_ij /
     rho_i, the pore-pressure part of Eq. (26) for the increment, over the recorded pairs
     (norm: 1 / the lattice moment, as the step's stress divergence)."""
+    symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, dp, dv)
     for i in range(n_owned):
-        dv[i, 0] = 0.0
-        dv[i, 1] = 0.0
-    for k in range(n_pairs):
-        a = pairs[k, 0]
-        b = pairs[k, 1]
-        f = dp[a] + dp[b]
-        if a < n_owned:
-            dv[a, 0] -= vol[b] * f * pair_g[k, 0]
-            dv[a, 1] -= vol[b] * f * pair_g[k, 1]
-        if b < n_owned:
-            dv[b, 0] += vol[a] * f * pair_g[k, 0]
-            dv[b, 1] += vol[a] * f * pair_g[k, 1]
-    for i in range(n_owned):
-        a0 = norm * dv[i, 0] / rho[i]
-        a1 = norm * dv[i, 1] / rho[i]
+        a0 = -norm * dv[i, 0] / rho[i]
+        a1 = -norm * dv[i, 1] / rho[i]
         acc[i, 0] += a0
         acc[i, 1] += a1
         v[i, 0] += dt * a0

@@ -115,6 +115,31 @@ def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol
 
 
 @nb.njit(cache=True, error_model="numpy")
+def pore_pressure_force(n_owned, sums, rho, corrected, norm, share):
+    """The pore pressure's part of Eq. (26) as -grad p / rho_i from the pressure
+    differences of sums 8-9, Gp = sum_j V_j (p_j - p_i) grad W_ij, added to dv/dt (sums
+    23-24) of a sweep made with the pressure left out of the pair stress (`pair_sums`,
+    p_weight = 0). corrected: grad p = Gp M^-1, Eq. (22), exact for a linear p on any
+    arrangement; else grad p = norm Gp (norm = 1 / m0, the lattice moment).
+
+    The pair-symmetric form -sum_j V_j (p_i + p_j) grad W_ij / rho_i holds the term
+    -2 p_i S_i / rho_i, S_i = sum_j V_j grad W_ij, which vanishes only where the support
+    is even: in a disordered basal layer a particle holds its place there with a
+    pressure its neighbours do not have (issue 13, cause 12). Pressure differences
+    exert no force from a uniform p on any arrangement (the wall ghosts carry the
+    hydrostatic or the antisymmetric mirror of p), at the price of momentum conservation."""
+    for i in range(n_owned):
+        s = sums[i]
+        if corrected:
+            m00, m01, m10, m11 = _inverse_moment(s)
+            s[23] -= share * (s[8] * m00 + s[9] * m10) / rho[i]
+            s[24] -= share * (s[8] * m01 + s[9] * m11) / rho[i]
+        else:
+            s[23] -= share * norm * s[8] / rho[i]
+            s[24] -= share * norm * s[9] / rho[i]
+
+
+@nb.njit(cache=True, error_model="numpy")
 def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
          damping, dt):
     """The kick of the symplectic step, v^(n+1) = v^n + dt a^n (Eq. 45 at the state of

@@ -287,7 +287,7 @@ class _SphBlock:
         pair_sums(self.n, self.n, self.n, st["x"], v, v, st["stress"], st["p"], st["p_prev"],
                   st["poro"], st["vol"], st["rho"], st["perm"], st["acc"], *cells, self.h,
                   0.0, 0.0, 0.0, 1.0, 0.0, 0.0, True, False, self.sums, z((self.n, 3)),
-                  0.0, 1.0, False, z((0, 2), np.int64), z((0, 2)))
+                  0.0, 1.0, 1.0, False, z((0, 2), np.int64), z((0, 2)))
         bad = advance(self.n, self.sums, st["x"], st["u"], v, st["stress"], st["p"],
                       st["p_prev"], st["poro"], self.poro0, st["vol"], self.vol0, st["rho"],
                       st["perm"], st["acc"], self.drained_from, self.t, self.load_index,

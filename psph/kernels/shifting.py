@@ -1,0 +1,87 @@
+"""Particle shifting: keep the particle arrangement regular where the soil deforms.
+
+The pair-symmetric momentum Eq. (26) carries, for the pore pressure, the term
+-2 p_i S_i / rho_i with S_i = sum_j V_j grad_i W_ij, the gradient of the particle
+concentration C_i = sum_j V_j W_ij. On an even arrangement S_i = 0; in a disordered layer
+(the base of a spreading debris, where particles sink between their neighbours) it is not,
+and a particle there holds its place with a pressure its neighbours do not have
+(issue 13, cause 12: 2.6x its neighbours' pressure at the slope's base). The pressure
+differences alone, without that term, are unstable at free corners (README, cause 12),
+so the arrangement is kept even instead, as incompressible SPH does (Lind et al. 2012,
+J. Comput. Phys. 231; Skillen et al. 2013, CMAME 265): each step every particle moves by
+
+    delta r_i = -D grad C_i,   D = A h^2 |L_i| dt,
+
+down the concentration gradient, by at most `cap` (a fraction of dx). |L_i| is the norm
+of the particle's velocity gradient (sums 4-7 of `pair_sums`): disorder is made by
+deformation, so soil at rest or in rigid motion does not shift, and the bottom row under a
+debris sliding on a no-slip base does (there |v| is small, and a shift scaled with |v|,
+as Skillen et al.'s, left the basal layer as disordered as without it). Near a free
+surface S_i points into the soil because the support is cut, not because the particles are
+uneven, so by the trace of the moment matrix of Eq. (22) (1.98 inside, 1.92 on the second
+row and 1.28 on the surface row of a lattice at h = 1.2 dx): below `free_trace` (the free
+surface of the ponding condition) a particle does not shift; below `surface_trace` only
+the part along the surface is kept. (Shifting the surface row along its tangent lifted
+the debris front of the slope off the floor, particle by particle, until one compacted
+to n = 0 at 6.2 s.) The particle's fields (stress, porosity, pressure, plastic strain,
+displacement) stay with it: the shift is a small fraction of dx per step, an error of the
+order of delta r . grad f.
+"""
+
+import math
+
+import numba as nb
+
+SHIFT_CAP = 0.05  # the longest shift of one step, in dx
+SURFACE_TRACE = 1.95  # trace(M) below which only the part along the surface is kept
+FREE_TRACE = 1.5  # trace(M) below which a particle is on the free surface: no shift
+
+
+@nb.njit(cache=True)
+def _surface_normal(m00, m01, m10, m11):
+    """Unit eigenvector of the symmetric part of the moment matrix for its smaller
+    eigenvalue: the direction in which the support is cut."""
+    b = 0.5 * (m01 + m10)
+    lam = 0.5 * (m00 + m11) - math.sqrt(0.25 * (m00 - m11) ** 2 + b * b)
+    n0 = b
+    n1 = lam - m00
+    if abs(n0) + abs(n1) < 1e-12 * (abs(m00) + abs(m11)):
+        n0 = lam - m11
+        n1 = b
+    norm = math.hypot(n0, n1)
+    if norm == 0.0:
+        return 0.0, 0.0
+    return n0 / norm, n1 / norm
+
+
+@nb.njit(cache=True)
+def shift_particles(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, free_trace, x,
+                    shift):
+    """Move owned particles by delta r_i = -A h^2 |L_i| dt grad C_i (module docstring), at
+    most `cap` long; not at all where trace(M_i) < free_trace, only along the surface
+    where trace(M_i) < surface_trace (M_i: columns 0-3 of `sums`, the sums of
+    `pair_sums`; L_i: columns 4-7). The shifts are written to `shift`."""
+    for i in range(n_owned):
+        m = sums[i]
+        trace = m[0] + m[3]
+        if trace < free_trace:
+            shift[i, 0] = 0.0
+            shift[i, 1] = 0.0
+            continue
+        rate = math.sqrt(m[4] * m[4] + m[5] * m[5] + m[6] * m[6] + m[7] * m[7])
+        d = coef * h * h * rate * dt
+        d0 = -d * grad_c[i, 0]
+        d1 = -d * grad_c[i, 1]
+        if trace < surface_trace:
+            n0, n1 = _surface_normal(m[0], m[1], m[2], m[3])
+            dn = d0 * n0 + d1 * n1
+            d0 -= dn * n0
+            d1 -= dn * n1
+        length = math.hypot(d0, d1)
+        if length > cap:
+            d0 *= cap / length
+            d1 *= cap / length
+        x[i, 0] += d0
+        x[i, 1] += d1
+        shift[i, 0] = d0
+        shift[i, 1] = d1
