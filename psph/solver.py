@@ -207,9 +207,11 @@ class Simulation:
         if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
             pname = "explicit->tpi"
         model = ",drucker_prager" if self.plastic else ",elastic"
-        stages.append(Stage(f"update[{pname}{model}]", self._update))
         if self.shifting > 0.0:
+            # before the update: the sweep's volumes, which the update changes on owned
+            # rows only (halo copies keep them), so the sums stay partition-independent
             stages.append(Stage("shifting", self._shift))
+        stages.append(Stage(f"update[{pname}{model}]", self._update))
         return stages
 
     def state_bytes(self) -> int:
@@ -392,7 +394,8 @@ class Simulation:
 
     def _shift(self) -> None:
         """Particle shifting (`stabilisation.shifting`, psph/kernels/shifting.py) over the
-        pairs of this step's sweep, then the wall contact as after the update."""
+        pairs and volumes of this step's sweep; the update that follows moves x by dt v
+        and puts back a particle found beyond a wall."""
         st = self.store
         if self.scratch_shift.shape[0] < st.cap:
             self.scratch_shift = np.zeros((st.cap, 5))
@@ -404,9 +407,6 @@ class Simulation:
         shift_particles(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
                         SHIFT_CAP * self.scene.particles.dx, SURFACE_TRACE, FREE_TRACE,
                         st.x, self.scratch_shift[:, 2:4])
-        if len(self.wall_axis):
-            wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
-                         self.wall_sign)
 
     def mass_balance_residual(self) -> float:
         """`PressureSolve.residual` of this step (collective)."""
