@@ -160,10 +160,8 @@ class Pressure(_Model):
     # where a drained side holds p = 0: "mirror" on its true surface (antisymmetric
     # ghosts or images, psph/drainage.py), "layer" on its outer particle layer, dx/2 inside
     drained_boundary: Literal["mirror", "layer"] = "mirror"
-    # the pore pressure in the momentum Eq. (26): "pair", in the pair's total stress as the
-    # paper writes it; as -grad p / rho from pressure differences, "difference" (plain
-    # kernel gradient / m0) or "gradient" (corrected, Eq. 22): a uniform p exerts no
-    # force on any arrangement (issue 13, cause 12); explicit and TPI only
+    # the pore pressure in Eq. (26): "pair" (the paper's), or from pressure differences,
+    # tried for issue 13 cause 12 and unstable at free corners (README); explicit/TPI only
     momentum: Literal["pair", "difference", "gradient", "closure"] = "pair"
 
 
