@@ -136,7 +136,7 @@ class Simulation:
         self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h)  # F~ of Eq. (23)
         self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
         self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
-        self.scratch_shift = np.zeros((0, 4))  # grad C and the shift of `_shift`
+        self.scratch_shift = np.zeros((0, 5))  # grad C, the shift and 1/2 of `_shift`
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
@@ -145,7 +145,7 @@ class Simulation:
             else np.zeros(2)
         self.damping = self.soil.damping_coefficient(scene.stabilisation.damping, self.h)
         self.coupled = scene.pressure.scheme != "none"
-        # 0: the pore pressure enters Eq. (26) as a corrected gradient (pressure.momentum)
+        # weight of p in the pair stress of Eq. (26): 1 "pair", 0.5 "closure", 0 the others
         self.p_weight = {"pair": 1.0, "closure": 0.5}.get(scene.pressure.momentum, 0.0) \
             if self.coupled else 1.0
         self.av_sound_speed = (self.soil.undrained_sound_speed
@@ -399,8 +399,8 @@ class Simulation:
         st = self.store
         if self.scratch_shift.shape[0] < st.cap:
             self.scratch_shift = np.zeros((st.cap, 5))
+            self.scratch_shift[:, 4] = 0.5  # grad C_i = sum_j V_j (1/2 + 1/2) grad_i W_ij
         half = self.scratch_shift[:, 4]
-        half.fill(0.5)  # grad C_i = sum_j V_j (1/2 + 1/2) grad_i W_ij
         grad_c = self.scratch_shift[:, 0:2]
         symmetric_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.vol,
                                 half, grad_c)
