@@ -298,21 +298,21 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
 
 
 @nb.njit(cache=True)
-def symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, q, out, self_sign=1.0):
-    """out_i = sum_j V_j (q_j + self_sign q_i) grad_i W_ij of owned particles over the
-    pairs `pair_sums` recorded, in their visiting order (partition-independent).
-    self_sign = 1: the pair-symmetric gradient of Eq. (26); -1: from differences."""
+def symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, q, out):
+    """out_i = sum_j V_j (q_i + q_j) grad_i W_ij of owned particles over the pairs
+    `pair_sums` recorded, in their visiting order (partition-independent): the
+    pair-symmetric gradient of Eq. (26) for a scalar q (the projection's pressure
+    correction), and with q = 1/2 the concentration gradient of particle shifting."""
     for i in range(n_owned):
         out[i, 0] = 0.0
         out[i, 1] = 0.0
     for k in range(n_pairs):
         a = pairs[k, 0]
         b = pairs[k, 1]
+        f = q[a] + q[b]
         if a < n_owned:
-            f = q[b] + self_sign * q[a]
             out[a, 0] += vol[b] * f * pair_g[k, 0]
             out[a, 1] += vol[b] * f * pair_g[k, 1]
         if b < n_owned:
-            f = q[a] + self_sign * q[b]
             out[b, 0] -= vol[a] * f * pair_g[k, 0]
             out[b, 1] -= vol[a] * f * pair_g[k, 1]

@@ -74,7 +74,7 @@ def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: n
     """v_i += dt a_i and acc_i += a_i with a_i = -norm sum_j V_j (dp_i + dp_j) grad_i W_ij /
     rho_i, the pore-pressure part of Eq. (26) for the increment, over the recorded pairs
     (norm: 1 / the lattice moment, as the step's stress divergence)."""
-    symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, dp, dv, -1.0)  # VARIANT
+    symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, dp, dv)
     for i in range(n_owned):
         a0 = -norm * dv[i, 0] / rho[i]
         a1 = -norm * dv[i, 1] / rho[i]
