@@ -16,6 +16,8 @@ settlement error / final settlement over T_v in [0.1, 0.5].
     .venv/bin/python bench/time_vs_error.py --jobs 2   # the same on two cores (~55 min)
     .venv/bin/python bench/time_vs_error.py --quick    # dx = 0.02, k = 8e-4 column (~3 min)
     .venv/bin/python bench/time_vs_error.py --geotaichi  # GeoTaichi's start (~5 min)
+    .venv/bin/python bench/time_vs_error.py --jobs 2 --only 'explicit|alpha=0.7|projection dt=1.2'
+        # a subset in one run (labels matching the regular expression; writes *-only.*)
 
 `--geotaichi`: the `terzaghi_undrained` scene (H = 1 m, q = 10 kPa, k = 2e-4, dx = 0.02 m,
 2 particles wide: 100 particles; from the undrained state with the top drained from t = 0,
@@ -241,8 +243,12 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=1,
                     help="cases run in this many worker processes at once (one core each; "
                          "each case's CPU time is its own process's)")
+    ap.add_argument("--only", metavar="REGEX",
+                    help="run only the cases whose label matches (re.search), e.g. "
+                         "'explicit|projection dt=1.2'; the table says which were run")
     args = ap.parse_args()
-    tag = "-quick" if args.quick else "-geotaichi" if args.geotaichi else ""
+    tag = ("-quick" if args.quick else "-geotaichi" if args.geotaichi else "") \
+        + ("-only" if args.only else "")
     OUT.mkdir(parents=True, exist_ok=True)
     jpath, ppath = OUT / f"time_vs_error{tag}.json", OUT / f"time_vs_error{tag}.png"
     if args.plot_only:
@@ -258,6 +264,12 @@ def main() -> None:
         name, base = "terzaghi", BASE + (QUICK if args.quick else [])
         todo = cases(base)
         column = "dx=0.02, k=8e-4" if args.quick else "dx=0.01, k=2e-4 (paper), 1000 particles"
+    if args.only:
+        import re
+
+        todo = [(label, ov) for label, ov in todo if re.search(args.only, label)]
+        if not todo:
+            raise SystemExit(f"--only {args.only!r}: no case label matches")
     for r in _results(todo, base, name, args.jobs):
         label = r["label"]
         rows.append(r)
@@ -269,6 +281,7 @@ def main() -> None:
         else:
             print(f"{label:<30} {r['R']:6.1f}  unstable: {r['failure']}", flush=True)
     data = {"date": date.today().isoformat(), "machine": platform.node(), "jobs": args.jobs,
+            "only": args.only,
             "cpu": platform.processor() or platform.machine(), "column": column,
             "cases": rows, "headline": headline(rows)}
     if args.geotaichi:

@@ -34,6 +34,8 @@ FIELDS: tuple[Field, ...] = (
     Field("rho", 1, "kg/m^3", "mixture density (1 - n) rho_s + n rho_l", True),
     Field("perm", 1, "m/s", "hydraulic conductivity k", True),
     Field("acc", 2, "m/s^2", "acceleration of the last step", True),
+    Field("dp_prev", 1, "Pa", "pressure increment p^(n-1) - p^(n-2), the projection's "
+          "second-order warm start (pressure_solve.py)", False),
     Field("u", 2, "m", "displacement from the initial position", False),
     Field("poro0", 1, "1", "initial porosity", False),
     Field("vol0", 1, "m^2", "initial volume", False),
@@ -45,6 +47,8 @@ FIELDS: tuple[Field, ...] = (
 )
 
 FIELD_BY_NAME = {f.name: f for f in FIELDS}
+# fields added after checkpoint format 1 was fixed: zero when an older checkpoint lacks them
+ADDED_FIELDS = ("dp_prev",)
 NEIGHBOUR_FIELDS = tuple(f.name for f in FIELDS if f.neighbour)
 
 

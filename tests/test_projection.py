@@ -89,3 +89,32 @@ def test_terzaghi_from_the_undrained_state_to_tv_01(tmp_path):
         assert err["pressure"][tv]["max_abs_p_error_over_q"] < 0.004, err
     assert err["settlement_max_abs_error_over_final"] < 0.003, err
     assert summary["pressure_solve"]["steps_not_converged"] == 0
+
+
+def test_restart_with_the_projection_continues_bitwise(tmp_path):
+    """The warm start extrapolates the last two increments (`pressure_solve.py`); the older
+    one travels with the particle (`dp_prev`) and in the checkpoint, so a restarted run
+    takes the same CG iterates as the uninterrupted one."""
+    import shutil
+
+    from tests.helpers import compare_runs
+
+    scene = load_scene("terzaghi", COARSE + PROJECTION + [
+        "time.dt=2.4e-5", "time.end=0.02", "verification.tv=[]", "checkpoint.every=500",
+        "checkpoint.at_end=false"])
+    run(scene, tmp_path / "full", quiet=True)
+    shutil.copytree(tmp_path / "full", tmp_path / "again")
+    summary = run(scene, tmp_path / "again", quiet=True,
+                  restart=tmp_path / "again" / "checkpoint.h5")
+    assert summary["steps_this_run"] < summary["steps"]
+    assert compare_runs(tmp_path / "full" / "particles.h5",
+                        tmp_path / "again" / "particles.h5") is None
+    # a checkpoint written before `dp_prev` existed restarts with a first-order warm start
+    import h5py
+
+    from psph.io.checkpoint import read_checkpoint
+
+    with h5py.File(tmp_path / "full" / "checkpoint.h5", "a") as f:
+        del f["particles"]["dp_prev"]
+    _, arrays = read_checkpoint(tmp_path / "full" / "checkpoint.h5")
+    assert np.all(arrays["dp_prev"] == 0.0) and len(arrays["dp_prev"]) == len(arrays["p"])

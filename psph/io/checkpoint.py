@@ -17,7 +17,7 @@ import numpy as np
 import psph
 from psph.errors import SceneError
 from psph.io.snapshots import write_rows
-from psph.particles import FIELDS
+from psph.particles import ADDED_FIELDS, FIELDS
 
 FORMAT = "psph-checkpoint-1"
 
@@ -75,7 +75,8 @@ def read_checkpoint(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
                 raise SceneError(f"{where}: incomplete checkpoint (the writer was "
                                  "interrupted); use the previous one")
             meta = json.loads(f.attrs["meta"])
-            arrays = {fld.name: f["particles"][fld.name][()] for fld in FIELDS}
+            arrays = {fld.name: f["particles"][fld.name][()] for fld in FIELDS
+                      if fld.name not in ADDED_FIELDS or fld.name in f["particles"]}
             n_ids = meta.get("n_ids", meta.get("n_global"))
             alive = f["alive"][()].astype(bool) if "alive" in f else np.ones(n_ids, bool)
     except SceneError:
@@ -83,6 +84,8 @@ def read_checkpoint(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     except (OSError, KeyError, ValueError) as e:
         raise SceneError(f"{where}: unreadable checkpoint ({_reason(e)})") from None
     n = meta.get("n_global")
+    for name in ADDED_FIELDS:
+        arrays.setdefault(name, np.zeros(n))
     bad = [k for k, a in arrays.items() if len(a) != n]
     if bad:
         raise SceneError(f"{where}: corrupt checkpoint (field {bad[0]} has "
