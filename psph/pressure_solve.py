@@ -173,7 +173,7 @@ class PressureSolve:
         sv["not_converged"] += not res.converged
         self.refresh_rows(dp, signed=True)
         pressure_correction(n, npairs, sim.pairs, sim.pair_g, st.vol, st.rho, d, dt,
-                            sim.lattice_norm, a["dv"], st.v, st.acc, fixed)
+                            sim.lattice_norm, a["dv"], st.v, st.acc)
         st.p_prev[:n] = st.p[:n]
         st.p[:n] += d[:n]
 

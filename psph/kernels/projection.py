@@ -70,24 +70,11 @@ def mirror_to_ghosts(n_real: int, n_total: int, src: np.ndarray, sign: np.ndarra
 @nb.njit(cache=True, error_model="numpy")
 def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray,
                         vol: np.ndarray, rho: np.ndarray, dp: np.ndarray, dt: float,
-                        norm: float, dv: np.ndarray, v: np.ndarray, acc: np.ndarray, fixed) -> None:
+                        norm: float, dv: np.ndarray, v: np.ndarray, acc: np.ndarray) -> None:
     """v_i += dt a_i and acc_i += a_i with a_i = -norm sum_j V_j (dp_i + dp_j) grad_i W_ij /
     rho_i, the pore-pressure part of Eq. (26) for the increment, over the recorded pairs
     (norm: 1 / the lattice moment, as the step's stress divergence)."""
-    for i in range(n_owned):
-        dv[i, 0] = 0.0
-        dv[i, 1] = 0.0
-    for k in range(n_pairs):
-        a = pairs[k, 0]
-        b = pairs[k, 1]
-        if a < n_owned:
-            f = dp[b] + (1.0 if fixed[a] else -1.0) * dp[a]
-            dv[a, 0] += vol[b] * f * pair_g[k, 0]
-            dv[a, 1] += vol[b] * f * pair_g[k, 1]
-        if b < n_owned:
-            f = dp[a] + (1.0 if fixed[b] else -1.0) * dp[b]
-            dv[b, 0] -= vol[a] * f * pair_g[k, 0]
-            dv[b, 1] -= vol[a] * f * pair_g[k, 1]
+    symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, dp, dv)
     for i in range(n_owned):
         a0 = -norm * dv[i, 0] / rho[i]
         a1 = -norm * dv[i, 1] / rho[i]
