@@ -34,6 +34,19 @@ STRONG = (20_000, 100_000, 400_000)
 WEAK = ((50_000, 1), (100_000, 2))
 
 
+def timed_windows(sim, comm, steps: int, windows: int = 3) -> list[float]:
+    """Wall seconds of `windows` windows of `steps` steps each, a barrier around each."""
+    out = []
+    for _ in range(windows):
+        comm.Barrier()
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            sim.advance_one()
+        comm.Barrier()
+        out.append(time.perf_counter() - t0)
+    return out
+
+
 def worker(n: int, quick: bool) -> None:
     from mpi4py import MPI
 
@@ -49,16 +62,9 @@ def worker(n: int, quick: bool) -> None:
     sim = Simulation(scene, make_slabs(scene, comm))
     for _ in range(3):
         sim.advance_one()
-    windows = []
     for stage in sim.stages:
         stage.seconds = 0.0
-    for _ in range(3):
-        comm.Barrier()
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            sim.advance_one()
-        comm.Barrier()
-        windows.append(time.perf_counter() - t0)
+    windows = timed_windows(sim, comm, steps)
     stage_s = {s.name: s.seconds / (3 * steps) for s in sim.stages}
     stages = comm.gather(stage_s, root=0)
     owned = comm.gather(sim.store.n_owned, root=0)

@@ -43,6 +43,7 @@ from datetime import date
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
+from scaling import timed_windows  # noqa: E402
 from throughput import BLOCK  # noqa: E402
 
 OUT = Path(__file__).parent / "out"
@@ -99,14 +100,7 @@ def worker(n: int) -> None:
         sim.advance_one()
     counting = CountingComm(sim.slabs.comm)
     sim.slabs.comm = counting
-    windows = []
-    for _ in range(3):
-        comm.Barrier()
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            sim.advance_one()
-        comm.Barrier()
-        windows.append(time.perf_counter() - t0)
+    windows = timed_windows(sim, comm, steps)
     per = 3 * steps
     rec = {"particles": sim.n_global, "ranks": comm.Get_size(),
            "seconds_per_step": min(windows) / steps,
