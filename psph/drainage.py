@@ -66,12 +66,12 @@ class Drainage:
         return self.wall_drained
 
     def update_planes(self, t: float, store, slabs) -> np.ndarray:
-        """Activate the free planes whose side has drained by t and move each to its first
-        position plus the mean displacement of the outer particle layer (exact sums, the
-        same bits on any rank count; one collective per active plane)."""
+        """Move each free plane to its first position plus the mean displacement of the
+        outer particle layer (exact sums, the same bits on any rank count; one collective
+        per plane), and mark the planes whose side has drained by t (planes[:, 3]: the
+        Darcy images; the projection's correction images act from the start,
+        `images.image_weights`)."""
         for q in range(len(self.planes)):
-            if t < self.plane_from[q]:
-                continue
             axis, pos, sign = int(self.planes[q, 0]), self.planes[q, 1], self.planes[q, 2]
             if self._row.shape[0] < store.n_owned:
                 self._row = np.zeros(store.cap)
@@ -81,5 +81,5 @@ class Drainage:
             total, count = slabs.exact_sums([local_parts(self._parts, k), np.array([float(m)])])
             if count > 0:
                 self.planes[q, 1] = self.pos0[q] + total / count
-            self.planes[q, 3] = 1.0
+            self.planes[q, 3] = 1.0 if t >= self.plane_from[q] else 0.0
         return self.planes

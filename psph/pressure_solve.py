@@ -46,7 +46,7 @@ class PressureSolve:
 
     def _weights(self, a: dict) -> tuple[np.ndarray, np.ndarray]:
         """The pair weights of the pressure operator (`laplacian.py`) with this step's pairs
-        and positions, and the drained planes' images (diagonal and off-diagonal weights;
+        and positions, and the free planes' images (diagonal and off-diagonal weights;
         the images' own part goes into a["storage"], so call after `projection_rhs`)."""
         sim = self.sim
         st = sim.store
@@ -58,9 +58,9 @@ class PressureSolve:
                      sim.dt * sim.lattice_norm, w)
         if not sim.drainage.has_planes:
             return w, w
-        image_weights(st.n_owned, sim.n_pairs, sim.pairs, st.x, st.perm, st.vol,
-                      sim.drainage.planes, sim.h, k_scale, w, a["w_diag"], a["w_off"],
-                      a["storage"])
+        image_weights(st.n_owned, sim.n_pairs, sim.pairs, st.x, st.perm, st.rho, st.vol,
+                      sim.drainage.planes, sim.h, k_scale, sim.dt * sim.lattice_norm, w,
+                      a["w_diag"], a["w_off"], a["storage"])
         return a["w_diag"], a["w_off"]
 
     def _system(self, p: np.ndarray, t: float) -> tuple:

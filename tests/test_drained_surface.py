@@ -91,7 +91,8 @@ def test_operator_with_images_is_symmetric_positive_definite_and_matches_the_sum
     w, wd, wo = np.zeros(n_pairs), np.zeros(n_pairs), np.zeros(n_pairs)
     pair_weights(n_pairs, pr, g, x, np.ones(n), np.ones(n), 1.0, 0.0, w)
     storage = np.zeros(n)
-    image_weights(n, n_pairs, pr, x, np.ones(n), vol, planes, H, 1.0, w, wd, wo, storage)
+    image_weights(n, n_pairs, pr, x, np.ones(n), np.ones(n), vol, planes, H, 1.0, 0.0, w, wd,
+                  wo, storage)
     fixed = np.zeros(n, bool)
     S = np.zeros((n, n))
     for j in range(n):
@@ -101,6 +102,38 @@ def test_operator_with_images_is_symmetric_positive_definite_and_matches_the_sum
     assert np.allclose(S, S.T, rtol=0, atol=1e-13 * np.abs(S).max())
     assert np.linalg.eigvalsh(S).min() > 0.0
     assert np.allclose(-(S @ q) / vol, s[:, 17] - q * s[:, 16], rtol=1e-10, atol=1e-10)
+
+
+def test_correction_images_pin_the_operator_at_the_plane_before_it_drains():
+    """The velocity-correction part of the operator (dt / rho) is imaged across a free
+    plane from the start, drained or not: the pair-symmetric correction's self term acts
+    as the antisymmetric image of a row's own increment. With the plane not yet drained
+    (planes[:, 3] = 0) and no Darcy part, S 1 = 0 away from the plane (no images in the
+    support) and S 1 > 0 within 2h of it, and S stays symmetric positive definite."""
+    x = _column(8, 8)
+    n = len(x)
+    vol = np.full(n, DX * DX)
+    pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
+    _, n_pairs = sums_for(x, H, vol, pairs=pairs)
+    pr, g = pairs[0][:n_pairs], pairs[1][:n_pairs]
+    rho, dt = np.full(n, 2000.0), 1e-5
+    w, wd, wo = np.zeros(n_pairs), np.zeros(n_pairs), np.zeros(n_pairs)
+    pair_weights(n_pairs, pr, g, x, np.ones(n), rho, 0.0, dt, w)
+    storage = np.zeros(n)
+    planes = np.array([[1.0, TOP, -1.0, 0.0]])
+    image_weights(n, n_pairs, pr, x, np.ones(n), rho, vol, planes, H, 1.0, dt, w, wd, wo,
+                  storage)
+    S = np.zeros((n, n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = 1.0
+        apply_operator(n, n_pairs, pr, wd, wo, vol, storage, np.zeros(n, bool), e, S[:, j])
+    row_sum = S @ np.ones(n)
+    near = TOP - x[:, 1] < 2 * H
+    assert np.allclose(S, S.T, rtol=0, atol=1e-13 * np.abs(S).max())
+    assert np.linalg.eigvalsh(S).min() > 0.0
+    assert np.all(row_sum[near] > 1e-3 * np.abs(S).max())
+    assert np.allclose(row_sum[~near], 0.0, atol=1e-12 * np.abs(S).max())
 
 
 @pytest.mark.parametrize("drained", [False, True])

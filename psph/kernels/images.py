@@ -102,29 +102,38 @@ def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: 
 
 @nb.njit(cache=True)
 def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
-                  perm: np.ndarray, vol: np.ndarray, planes: np.ndarray, h: float,
-                  k_scale: float, w: np.ndarray, w_diag: np.ndarray, w_off: np.ndarray,
-                  storage: np.ndarray) -> None:
+                  perm: np.ndarray, rho: np.ndarray, vol: np.ndarray, planes: np.ndarray,
+                  h: float, k_scale: float, rho_scale: float, w: np.ndarray,
+                  w_diag: np.ndarray, w_off: np.ndarray, storage: np.ndarray) -> None:
     """The images in the operator of the pressure solve (`laplacian.py`): a recorded pair
-    (a, b) of weight w couples a to b* with the Darcy weight w* = 2F_ab* k_scale kbar, and
-    q_a - q_b* = q_a + q_b, so the pair's diagonal weight is w + w* and its off-diagonal
-    w - w* (still symmetric: the reflection keeps |x_a - x_b*| = |x_b - x_a*|). A row's own
-    image adds 2 V_i w*_ii q_i, kept in `storage` (V_i storage_i q_i of the operator)."""
+    (a, b) of weight w couples a to b* with the weight w* = 2F_ab* (k_scale kbar +
+    rho_scale / rhobar), and q_a - q_b* = q_a + q_b, so the pair's diagonal weight is
+    w + w* and its off-diagonal w - w* (still symmetric: the reflection keeps
+    |x_a - x_b*| = |x_b - x_a*|). A row's own image adds 2 V_i w*_ii q_i, kept in
+    `storage` (V_i storage_i q_i of the operator).
+
+    The Darcy part (k_scale) is imaged once the plane's side has drained (planes[q, 3]).
+    The velocity-correction part (rho_scale = dt) is imaged from the start: the
+    correction takes the pair-symmetric gradient of Eq. (26), whose self term
+    -2 dp_i S_i / rho_i is, on a plane surface, the antisymmetric image of the particle's
+    own increment. Without that image in the operator the correction changed div v at a
+    loaded top by other than the solve counted on, and at twice the solid cap a
+    period-2 mode of p grew about 2.8x a step (issue 14; `tests/test_projection.py`)."""
     support2 = 4.0 * h * h
     for k in range(n_pairs):
         w_diag[k] = w[k]
         w_off[k] = w[k]
     for q in range(planes.shape[0]):
-        ax, pos, sg = _plane(planes, q)
-        if ax < 0:
-            continue
+        ax, pos, sg = int(planes[q, 0]), planes[q, 1], planes[q, 2]
+        darcy = k_scale if planes[q, 3] != 0.0 else 0.0
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
             r = _image_of_pair(x, a, b, ax, pos, sg, support2)[2]
             if r < 0.0:
                 continue
-            wi = -2.0 * dw_cubic(r, h) / r * k_scale * 0.5 * (perm[a] + perm[b])
+            wi = -2.0 * dw_cubic(r, h) / r * (darcy * 0.5 * (perm[a] + perm[b])
+                                               + rho_scale * 2.0 / (rho[a] + rho[b]))
             w_diag[k] += wi
             w_off[k] -= wi
         for i in range(n_owned):
@@ -132,7 +141,8 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
             if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
                 continue
             r = abs(d_ax)
-            storage[i] += 2.0 * vol[i] * (-2.0 * dw_cubic(r, h) / r) * k_scale * perm[i]
+            storage[i] += 2.0 * vol[i] * (-2.0 * dw_cubic(r, h) / r) * (
+                darcy * perm[i] + rho_scale / rho[i])
 
 
 @nb.njit(cache=True)
