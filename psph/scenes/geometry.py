@@ -1,4 +1,4 @@
-"""Particle generation from scene geometry (global, identical on every rank)."""
+"""Particle generation from scene geometry: lattices, and which points lie inside."""
 
 import numpy as np
 
@@ -13,13 +13,16 @@ def lattice_block(lo, hi, dx: float) -> np.ndarray:
     return np.column_stack([gx.ravel(), gy.ravel()])
 
 
-def surface_layer(x: np.ndarray, side: str, dx: float) -> np.ndarray:
-    """Mask of the outermost particle layer on `side` (left, right, bottom, top)."""
+def surface_layer(x: np.ndarray, side: str, dx: float, bounds: np.ndarray | None = None
+                  ) -> np.ndarray:
+    """Mask of the outermost particle layer on `side` (left, right, bottom, top).
+    `bounds` (2, dim): the smallest and largest coordinates of all particles, when `x`
+    holds only some of them (default: those of `x`)."""
     axis = 0 if side in ("left", "right") else 1
     c = x[:, axis]
     if side in ("right", "top"):
-        return c > c.max() - 0.5 * dx
-    return c < c.min() + 0.5 * dx
+        return c > (c.max() if bounds is None else bounds[1, axis]) - 0.5 * dx
+    return c < (c.min() if bounds is None else bounds[0, axis]) + 0.5 * dx
 
 
 def domain_lattice(lo, hi, dx: float) -> np.ndarray:
