@@ -42,6 +42,12 @@ def inside_polygon(points: np.ndarray, vertices) -> np.ndarray:
 
 def inside_mesh(points: np.ndarray, file: str) -> np.ndarray:
     """Mask of the points inside any triangle or quad of a mesh file (read by meshio)."""
+    return inside_triangles(points, *read_mesh(file))
+
+
+def read_mesh(file: str) -> tuple[np.ndarray, np.ndarray]:
+    """(xy (k, 2), triangles (m, 3)) of a mesh file's triangles and quads (each quad as
+    two triangles), read by meshio; SceneError (one line) if it cannot be used."""
     import contextlib
     import io
 
@@ -66,7 +72,11 @@ def inside_mesh(points: np.ndarray, file: str) -> np.ndarray:
             tris += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
     if not tris:
         raise SceneError(f"particles.meshes: {file}: no triangle or quad cells")
-    tri = np.concatenate(tris)
+    return xy, np.concatenate(tris)
+
+
+def inside_triangles(points: np.ndarray, xy: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Mask of the points inside any of the triangles `tri` (vertex indices into xy)."""
     inside = np.zeros(len(points), bool)
     a, b, c = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
     for k in range(len(tri)):  # per cell, only the lattice points in its bounding box

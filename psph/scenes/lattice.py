@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from psph.scenes.geometry import inside_mesh, inside_polygon
+from psph.scenes.geometry import inside_polygon, inside_triangles, read_mesh
 
 
 class SerialReducer:
@@ -48,27 +48,45 @@ def lattice_axes(lo, hi, dx: float) -> tuple[np.ndarray, np.ndarray]:
     return lo[0] + (np.arange(nx) + 0.5) * dx, lo[1] + (np.arange(ny) + 0.5) * dx
 
 
-def has_fill(scene) -> bool:
-    pa = scene.particles
-    return bool(pa.polygons or pa.meshes or pa.layers)
+class Fill:
+    """The polygons, meshes and layers of a scene, read once (every file and profile, so
+    that bad input raises the same error on every rank), with the box that holds them."""
 
+    def __init__(self, scene):
+        from psph.scene import check_layer_profiles
 
-def fill_mask(scene, points: np.ndarray) -> np.ndarray:
-    """Which domain-lattice points lie in a polygon, mesh or layer of the scene. Reads
-    every file and checks every profile even for no points, so that bad input raises the
-    same error on every rank."""
-    from psph.scene import check_layer_profiles
-    from psph.scenes.profiles import inside_layer
+        pa = scene.particles
+        self.polygons = [np.asarray(p.vertices, float) for p in pa.polygons]
+        self.meshes = [read_mesh(m.file) for m in pa.meshes]
+        self.layers = [check_layer_profiles(layer, f"particles.layers[{il}]")
+                       for il, layer in enumerate(pa.layers)]
+        corners = list(self.polygons) + [xy[tri.ravel()] for xy, tri in self.meshes]
+        for top, bottom in self.layers:
+            x0, x1 = max(top[0, 0], bottom[0, 0]), min(top[-1, 0], bottom[-1, 0])
+            corners.append(np.array([[x0, bottom[:, 1].min()], [x1, top[:, 1].max()]]))
+        self.empty = not corners
+        if not self.empty:
+            pts = np.concatenate(corners)
+            # wider than any edge tolerance of the tests below (1e-9 of the shape's size)
+            margin = 1e-6 * max(np.abs(pts).max(), 1.0) + 1e-9
+            self.lo, self.hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
 
-    pa = scene.particles
-    taken = np.zeros(len(points), bool)
-    for poly in pa.polygons:
-        taken |= inside_polygon(points, poly.vertices)
-    for mesh in pa.meshes:
-        taken |= inside_mesh(points, mesh.file)
-    for il, layer in enumerate(pa.layers):
-        taken |= inside_layer(points, *check_layer_profiles(layer, f"particles.layers[{il}]"))
-    return taken
+    def span(self, c: np.ndarray, axis: int) -> np.ndarray:
+        """Indices of the lattice coordinates c (along axis) within the box."""
+        return np.flatnonzero((c >= self.lo[axis]) & (c <= self.hi[axis]))
+
+    def mask(self, points: np.ndarray) -> np.ndarray:
+        """Which points lie in a polygon, mesh or layer."""
+        from psph.scenes.profiles import inside_layer
+
+        taken = np.zeros(len(points), bool)
+        for vertices in self.polygons:
+            taken |= inside_polygon(points, vertices)
+        for xy, tri in self.meshes:
+            taken |= inside_triangles(points, xy, tri)
+        for top, bottom in self.layers:
+            taken |= inside_layer(points, top, bottom)
+        return taken
 
 
 def _grid(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
@@ -86,17 +104,19 @@ def census(scene, axis: int, reducer=SERIAL) -> tuple[np.ndarray, np.ndarray]:
         c = lattice_axes(b.min, b.max, dx)
         values.append(c[axis])
         counts.append(np.full(len(c[axis]), len(c[1 - axis]), np.int64))
-    if has_fill(scene):
-        xs, ys = lattice_axes(scene.domain.min, scene.domain.max, dx)
-        r0 = reducer.rank * len(ys) // reducer.size
-        r1 = (reducer.rank + 1) * len(ys) // reducer.size
-        taken = fill_mask(scene, _grid(xs, ys[r0:r1])).reshape(r1 - r0, len(xs))
+    fill = Fill(scene)
+    if not fill.empty:
+        c = lattice_axes(scene.domain.min, scene.domain.max, dx)
+        cols, rows = fill.span(c[0], 0), fill.span(c[1], 1)
+        share = rows[reducer.rank * len(rows) // reducer.size:
+                     (reducer.rank + 1) * len(rows) // reducer.size]
+        taken = fill.mask(_grid(c[0][cols], c[1][share])).reshape(len(share), len(cols))
+        local = np.zeros(len(c[axis]), np.int64)
         if axis == 0:
-            local = taken.sum(axis=0, dtype=np.int64)
+            local[cols] = taken.sum(axis=0, dtype=np.int64)
         else:
-            local = np.zeros(len(ys), np.int64)
-            local[r0:r1] = taken.sum(axis=1, dtype=np.int64)
-        values.append((xs, ys)[axis])
+            local[share] = taken.sum(axis=1, dtype=np.int64)
+        values.append(c[axis])
         counts.append(reducer.sum(local))
     return np.concatenate(values), np.concatenate(counts)
 
@@ -121,12 +141,14 @@ def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
         xs_out.append(_grid(c[0][idx[0]], c[1][idx[1]]))
         keys.append((offset + idx[1][:, None] * len(c[0]) + idx[0][None, :]).ravel())
         offset += len(c[0]) * len(c[1])
-    if has_fill(scene):
+    fill = Fill(scene)
+    if not fill.empty:
         xs, ys = lattice_axes(scene.domain.min, scene.domain.max, dx)
-        idx = [np.arange(len(xs)), np.arange(len(ys))]
-        idx[axis] = _in_slab((xs, ys)[axis], lo, hi)
+        idx = [fill.span(xs, 0), fill.span(ys, 1)]  # no point outside the box is taken
+        c = (xs, ys)[axis][idx[axis]]
+        idx[axis] = idx[axis][(c >= lo) & (c < hi)]
         points = _grid(xs[idx[0]], ys[idx[1]])
-        taken = fill_mask(scene, points).reshape(len(idx[1]), len(idx[0]))
+        taken = fill.mask(points).reshape(len(idx[1]), len(idx[0]))
         # id = offset + taken points in the rows below + in this row on lower ranks (the
         # slabs are in rank order along the axis) + those before it in this rank's row
         rows = np.zeros(len(ys), np.int64)
