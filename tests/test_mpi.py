@@ -224,6 +224,7 @@ def test_each_rank_seeds_only_its_slab(tmp_path_factory):
     if comm.Get_rank() == 0:
         mixed_scene(out)
     comm.Barrier()
+    initial_particles(load_scene(str(out / "mixed.toml")))  # imports, outside the trace
     scene = load_scene(str(out / "mixed.toml"), ["particles.dx=0.01"])
     tracemalloc.start()
     slabs = make_slabs(scene, comm)
