@@ -25,9 +25,11 @@ SIDES = {"left": (0, 0, 1.0), "right": (0, 1, -1.0), "bottom": (1, 0, 1.0), "top
 class Drainage:
     """The drained sides of a scene, as the kernels need them at time t."""
 
-    def __init__(self, scene, wall_sides: list[str], soil_x: np.ndarray):
+    def __init__(self, scene, wall_sides: list[str], soil_extent):
         """`wall_sides`: the sides with mirror ghosts, in the solver's wall order;
-        `soil_x`: the initial particle positions (for the free planes' first position)."""
+        `soil_extent()`: (2, dim) the smallest and largest initial particle coordinates
+        along each axis (for the free planes' first position), called (collectively) only
+        when a free side drains."""
         self.mirror = (scene.pressure.drained_boundary == "mirror"
                        and scene.pressure.scheme != "none")
         self.dx = scene.particles.dx
@@ -43,9 +45,10 @@ class Drainage:
         self.plane_from = np.array([getattr(b, s).drained_from for s in free])
         self.planes = np.zeros((len(free), 4))  # axis, pos, sign, active (images.py)
         self.pos0 = np.zeros(len(free))
+        bounds = soil_extent() if free else None
         for q, side in enumerate(free):
             axis, end, sign = SIDES[side]
-            edge = soil_x[:, axis].max() if end else soil_x[:, axis].min()
+            edge = bounds[end, axis]
             self.pos0[q] = edge - sign * 0.5 * self.dx
             self.planes[q] = (axis, self.pos0[q], sign, 0.0)
         self._row = np.zeros(0)

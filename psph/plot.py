@@ -117,12 +117,10 @@ def _history(out: Path) -> dict[str, np.ndarray]:
 
 def _verification(out: Path, scene, hist) -> dict:
     """The probe comparison of psph.verify, also written to OUT/verification.json."""
-    from psph.physics.initial import initial_particles
     from psph.run import probe_ids
     from psph.verify import history_errors
 
-    x0 = initial_particles(scene)["x"]
-    probes = {k: tuple(x0[i]) for k, i in probe_ids(scene).items()}
+    probes = {k: pos for k, (_, pos) in probe_ids(scene).items()}
     errors = history_errors(scene, hist, probes)
     (out / "verification.json").write_text(json.dumps(errors, indent=2) + "\n")
     return errors

@@ -10,15 +10,15 @@ from pathlib import Path
 
 import numpy as np
 
-from psph.decomposition.slabs import Slabs, slab_cuts
+from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts, slab_cuts
 from psph.errors import EARLY_STOP_SIGNALS, Interrupted, OutputError, SceneError
 from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
 from psph.io.space import SNAPSHOT_ROW_BYTES, require_space
 from psph.kernels.update import SCHEME_NONE, SCHEME_PROJECTION
-from psph.physics.initial import initial_particles
 from psph.restart_rules import check_restart_scene
 from psph.scene import Scene, to_toml
+from psph.scenes.lattice import SERIAL, census, nearest, seed
 from psph.solver import Simulation
 from psph.verify import reference_times
 from psph.verify.errors import TerzaghiMonitor
@@ -35,14 +35,18 @@ def _slab_axis(scene: Scene) -> int:
 
 
 def make_slabs(scene: Scene, comm=None, x: np.ndarray | None = None) -> Slabs:
-    """Slabs with equal particle counts for the positions `x` (default: the initial ones)."""
+    """Slabs with equal particle counts for the positions `x` (all particles, on every
+    rank), default the initial ones: counted per lattice coordinate, each rank counting
+    a share of the lattice, never built whole (collective)."""
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD if comm is None else comm
     axis = _slab_axis(scene)
-    if x is None:
-        x = initial_particles(scene)["x"]
-    return Slabs(axis, slab_cuts(x[:, axis], comm.Get_size(), 2.0 * scene.h), comm)
+    width = 2.0 * scene.h
+    if x is not None:
+        return Slabs(axis, slab_cuts(x[:, axis], comm.Get_size(), width), comm)
+    values, counts = census(scene, axis, CommReducer(comm))
+    return Slabs(axis, cuts_from_counts(values, counts, comm.Get_size(), width), comm)
 
 
 def snapshot_times(scene: Scene) -> list[float]:
@@ -141,17 +145,20 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
 
     if meta is None:
         sim = Simulation(scene, slabs)
+        n = sim.store.n_owned
+        probes = probe_ids(scene, sim.store.x[:n], sim.store.key[:n], slabs.reducer)
     else:
         alive = state.pop("alive")
-        sim = Simulation(scene, slabs, state, t=meta["t"], step=meta["step"], alive=alive,
-                         removals_done=meta["removals_done"])
+        mine = slabs.owned_mask(state["x"])
+        sim = Simulation(scene, slabs, {k: v[mine] for k, v in state.items()}, t=meta["t"],
+                         step=meta["step"], alive=alive, removals_done=meta["removals_done"])
+        probes = probe_ids(scene, reducer=slabs.reducer, slab=slabs.slab)
     del state
     writer = SnapshotWriter(out / "particles.h5", comm, scene.dim, toml_text,
                             resume_step=None if meta is None else sim.step)
     monitor = TerzaghiMonitor(scene, slabs) if scene.verification.reference == "terzaghi" \
         else None
     history = []
-    probes = probe_ids(scene)
     pending = [t for t in snapshot_times(scene) if meta is None or t > sim.t * (1 + 1e-12)]
     end = scene.time.end
     next_hist = 0.0
@@ -273,7 +280,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
             if sim.step % CONTROL_EVERY == 0 and control():
                 checkpoint()
                 _finish(sim, slabs, out, history, setup_seconds,
-                        time.perf_counter() - loop0, monitor, "interrupted")
+                        time.perf_counter() - loop0, monitor, probes, "interrupted")
                 signame = signal.Signals(
                     comm.allreduce(stop.signal or 0, op=MPI.MAX)).name
                 raise Interrupted(
@@ -312,10 +319,10 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         progress.close()
 
     return _finish(sim, slabs, out, history, setup_seconds, time.perf_counter() - loop0,
-                   monitor, "finished", restart)
+                   monitor, probes, "finished", restart)
 
 
-def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, status,
+def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, probes, status,
             restart=None) -> dict:
     """Summary (and verification errors) on every rank; rank 0 writes history.csv and
     summary.json. Collective."""
@@ -325,14 +332,12 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, stat
         summary["restarted_from"] = str(restart)
     scene = sim.scene
     rank0 = slabs.rank == 0
-    probes = probe_ids(scene)
     verification = None
     if rank0 and history:
         from psph.verify import history_errors
 
         cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
-        x0 = initial_particles(scene)["x"] if probes else None
-        verification = history_errors(scene, cols, {k: tuple(x0[i]) for k, i in probes.items()})
+        verification = history_errors(scene, cols, {k: pos for k, (_, pos) in probes.items()})
     if rank0 and scene.verification.reference == "collapse" and status == "finished":
         from psph.io.snapshots import read_snapshots
         from psph.verify.collapse import collapse_metrics, slide_history
@@ -359,16 +364,20 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, stat
     return summary
 
 
-def probe_ids(scene: Scene) -> dict[str, int]:
-    """Global id of the particle nearest to each `output.probes` point (initial positions)."""
+def probe_ids(scene: Scene, x: np.ndarray | None = None, key: np.ndarray | None = None,
+              reducer=SERIAL, slab: tuple | None = None) -> dict[str, tuple[int, tuple]]:
+    """Global id and initial position of the particle nearest to each `output.probes`
+    point, from each rank's initial particles `x` with ids `key` (default: seeded here for
+    `slab`, or all of them on one process). Collective when any probe is set."""
     if not scene.output.probes:
         return {}
-    x = initial_particles(scene)["x"]
-    return {name: int(np.argmin(np.sum((x - np.asarray(pt)) ** 2, axis=1)))
-            for name, pt in scene.output.probes.items()}
+    if x is None:
+        x, key = seed(scene, *(slab or ()), reducer=reducer)
+    ids, pos = nearest(list(scene.output.probes.values()), x, key, reducer)
+    return {name: (int(ids[j]), tuple(pos[j])) for j, name in enumerate(scene.output.probes)}
 
 
-def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
+def _history_row(sim: Simulation, probes: dict[str, tuple[int, tuple]]) -> dict:
     """One diagnostics row (collective): surface settlement, kinetic energy, max p, and p
     and displacement of each probe particle (its owner contributes, the others add 0)."""
     st = sim.store
@@ -379,7 +388,7 @@ def _history_row(sim: Simulation, probes: dict[str, int]) -> dict:
     local[1] = float(surf.sum())
     local[2] = 0.5 * np.sum(st.rho[:n] * st.vol[:n] * np.sum(st.v[:n] ** 2, axis=1))
     keys = st.key[:n]
-    for k, pid in enumerate(probes.values()):
+    for k, (pid, _) in enumerate(probes.values()):
         hit = np.flatnonzero(keys == pid)
         if len(hit):
             i = hit[0]

@@ -46,12 +46,13 @@ from psph.kernels.update import (
     porosity_follows_stress_filter,
 )
 from psph.particles import ParticleStore
-from psph.physics.initial import initial_particles, soil_positions
+from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
 from psph.physics.material import plasticity_parameters, soil_from_scene
 from psph.pressure_solve import PressureSolve
 from psph.scene import Scene
 from psph.scenes.geometry import inside_polygon
+from psph.scenes.lattice import extent, seed
 from psph.stepping import TimeStepping, time_stepping  # noqa: F401  (re-exported)
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
@@ -72,12 +73,13 @@ class Stage:
 class Simulation:
     """State, pipeline and clock of one run on this rank."""
 
-    def __init__(self, scene: Scene, slabs, state: dict | None = None, t: float = 0.0,
+    def __init__(self, scene: Scene, slabs, particles: dict | None = None, t: float = 0.0,
                  step: int = 0, alive: np.ndarray | None = None, removals_done: int = 0):
-        """`state`: global arrays of every particle field (a checkpoint) with the clock
-        (t, step) they belong to; default: the scene's initial particles at t = 0.
+        """`particles`: this rank's rows of every particle field (those of a checkpoint in
+        its slab) with the clock (t, step) they belong to; default: the scene's initial
+        particles of this rank's slab at t = 0, seeded here (no rank builds them all).
         `alive`: which of the initial ids are still in the run (a checkpoint's), and
-        `removals_done`: how many `remove` regions were applied already."""
+        `removals_done`: how many `remove` regions were applied already. Collective."""
         self.scene = scene
         self.slabs = slabs
         self.soil = soil_from_scene(scene)
@@ -87,16 +89,17 @@ class Simulation:
         self.step = step
         self.first_step = step
 
-        data = initial_particles(scene) if state is None else state
-        self.n_global = len(data["key"])
+        fresh = particles is None
+        data = initial_particles(scene, slabs.reducer, slabs.slab) if fresh else particles
+        n_local = len(data["key"])
+        self.n_global = int(slabs.reducer.sum(np.array([n_local], np.int64))[0])
         self.alive = np.ones(self.n_global, np.bool_) if alive is None else alive.astype(bool)
         self.n_ids = len(self.alive)  # ids run 0..n_ids-1; removed ones are not alive
         self.removals = sorted(scene.remove, key=lambda r: r.at)
         self.removals_done = removals_done
-        mine = slabs.owned_mask(data["x"])
-        self.store = ParticleStore(int(2 * mine.sum()) + 256)
-        self.store.load({k: v[mine] for k, v in data.items()})
-        if state is None:
+        self.store = ParticleStore(2 * n_local + 256)
+        self.store.load(data)
+        if fresh:
             self.store.u[:] = 0.0
 
         walls = [(side, b) for side in ("left", "right", "bottom", "top")
@@ -112,9 +115,11 @@ class Simulation:
         self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() else None
         self.ghost_src = np.zeros(0, np.int64)
         self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
-        # the initial lattice, also on a restart (x - u of a checkpoint is not its bits)
-        x0 = soil_positions(scene) if state is not None else data["x"]
-        self.drainage = Drainage(scene, [side for side, _ in walls], x0)
+        # the initial lattice's extent, also on a restart (x - u of a checkpoint is not
+        # its bits): from this slab's share of it
+        self.drainage = Drainage(scene, [side for side, _ in walls], lambda: extent(
+            data["x"] if fresh else seed(scene, *slabs.slab, reducer=slabs.reducer)[0],
+            slabs.reducer))
         self.pressure_solve = PressureSolve(self)
         self.solve = self.pressure_solve.stats
 

@@ -202,3 +202,53 @@ def test_pressure_projection_one_vs_two_ranks_bitwise(tmp_path_factory):
         one = json.loads((out / "one" / "summary.json").read_text())["pressure_solve"]
         two = json.loads((out / "two" / "summary.json").read_text())["pressure_solve"]
         assert one == two and one["iterations_max"] > 5
+
+
+@pytest.mark.mpi(min_size=2)
+def test_each_rank_seeds_only_its_slab(tmp_path_factory):
+    """Distributed set-up (issue 15): the census cuts the slabs where `slab_cuts` of all
+    particles would, each rank seeds exactly the particles it owns, with the ids and the
+    bits of the one-process set-up, and the peak memory of its set-up (census and seeding,
+    traced) is about its share of the one-process peak, not all of it."""
+    import tracemalloc
+
+    from mpi4py import MPI
+
+    from psph.decomposition.slabs import slab_cuts
+    from psph.physics.initial import initial_particles
+    from psph.run import make_slabs
+    from tests.test_setup import mixed_scene
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        mixed_scene(out)
+    comm.Barrier()
+    initial_particles(load_scene(str(out / "mixed.toml")))  # imports, outside the trace
+    scene = load_scene(str(out / "mixed.toml"), ["particles.dx=0.01"])
+    tracemalloc.start()
+    slabs = make_slabs(scene, comm)
+    local = initial_particles(scene, slabs.reducer, slabs.slab)
+    split_peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    tracemalloc.start()
+    whole = initial_particles(scene)  # all particles, as one process builds them
+    whole_peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+
+    mine = slabs.owned_mask(whole["x"])
+    problems = []
+    if len(local["key"]) != mine.sum():
+        problems.append(f"{len(local['key'])} particles seeded, {mine.sum()} owned")
+    problems += [f"field {k} differs" for k in whole
+                 if local[k].tobytes() != whole[k][mine].tobytes()]
+    cuts = slab_cuts(whole["x"][:, slabs.axis], comm.Get_size(), 2.0 * scene.h)
+    if not np.array_equal(slabs.cuts, cuts):
+        problems.append(f"cuts {slabs.cuts} instead of {cuts}")
+    share = mine.sum() / len(mine)
+    if split_peak > (share + 0.2) * whole_peak:
+        problems.append(f"set-up peak {split_peak} B for {share:.2f} of the particles, "
+                        f"{whole_peak} B for all")
+    problems = sum(comm.allgather(problems), [])  # every rank learns every verdict
+    assert not problems, problems
+    assert comm.allreduce(len(local["key"])) == len(whole["key"]) > 40000

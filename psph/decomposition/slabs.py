@@ -35,6 +35,64 @@ def slab_cuts(coords: np.ndarray, nranks: int, min_width: float = 0.0) -> np.nda
     return cuts
 
 
+def cuts_from_counts(values: np.ndarray, counts: np.ndarray, nranks: int,
+                     min_width: float = 0.0) -> np.ndarray:
+    """`slab_cuts` of the coordinates given as a histogram: `counts[i]` particles at
+    `values[i]` (values may repeat, counts may be 0). The same cuts, bit for bit, as
+    `slab_cuts` of the expanded array, from arrays as long as the lattice's columns."""
+    cuts = np.full(nranks + 1, np.inf)
+    cuts[0] = -np.inf
+    if nranks > 1:
+        order = np.argsort(values, kind="stable")
+        v = np.asarray(values, float)[order]
+        end = np.cumsum(np.asarray(counts, np.int64)[order])  # sorted index after each value
+        n = int(end[-1])
+
+        def at(k: int) -> float:  # c[k] of the sorted expanded coordinates
+            return v[np.searchsorted(end, k % n, side="right")]
+
+        for r in range(1, nranks):
+            k = min(max(r * n // nranks, 1), n - 1)
+            cuts[r] = 0.5 * (at(k - 1) + at(k))
+        for r in range(2, nranks):
+            cuts[r] = max(cuts[r], cuts[r - 1] + min_width)
+    return cuts
+
+
+class CommReducer:
+    """The reductions of psph/scenes/lattice.py over the ranks of `comm` (each a
+    collective on a small array)."""
+
+    def __init__(self, comm):
+        self.comm = comm
+        self.rank = comm.Get_rank()
+        self.size = comm.Get_size()
+
+    def _all(self, a, op) -> np.ndarray:
+        a = np.ascontiguousarray(a)
+        out = np.empty_like(a)
+        self.comm.Allreduce(a, out, op=op)
+        return out
+
+    def max(self, a) -> np.ndarray:
+        return self._all(a, MPI.MAX)
+
+    def min(self, a) -> np.ndarray:
+        return self._all(a, MPI.MIN)
+
+    def sum(self, a) -> np.ndarray:
+        return self._all(a, MPI.SUM)
+
+    def exclusive_scan(self, a) -> np.ndarray:
+        """Sum of the lower ranks' arrays (zeros on rank 0)."""
+        a = np.ascontiguousarray(a)
+        out = np.zeros_like(a)
+        self.comm.Exscan(a, out, op=MPI.SUM)
+        if self.rank == 0:  # MPI leaves rank 0's result undefined
+            out[...] = 0
+        return out
+
+
 class Slabs:
     """Owns the communicator and the slab layout; the only place particles cross ranks."""
 
@@ -44,6 +102,7 @@ class Slabs:
         self.size = self.comm.Get_size()
         self.axis = axis
         self.set_cuts(cuts)
+        self.reducer = CommReducer(self.comm)
         self.rebalances = 0
         self.last_imbalance = 1.0
         self.max_imbalance = 1.0  # the largest the rebalance check has seen
@@ -62,6 +121,11 @@ class Slabs:
         self.cuts = np.asarray(cuts, float).copy()
         self.lo = self.cuts[self.rank]
         self.hi = self.cuts[self.rank + 1]
+
+    @property
+    def slab(self) -> tuple[int, float, float]:
+        """(axis, lo, hi): this rank owns the coordinates along axis in [lo, hi)."""
+        return self.axis, float(self.lo), float(self.hi)
 
     def owned_mask(self, x: np.ndarray) -> np.ndarray:
         c = x[:, self.axis]

@@ -1,46 +1,32 @@
-"""Initial particle state of a scene (global arrays, identical on every rank)."""
+"""Initial particle state of a scene: of all particles (one process, post-processing) or
+of one slab's (each rank seeds its own, issue 15), with the same ids and bits either way.
+What needs the other ranks (global extrema, the top of each lattice column) comes through
+a reducer (psph/scenes/lattice.py); nothing here calls MPI."""
 
 import math
 
 import numpy as np
 
-from psph.scenes.geometry import (
-    domain_lattice,
-    inside_mesh,
-    inside_polygon,
-    lattice_block,
-    surface_layer,
-)
+from psph.scenes.geometry import surface_layer
+from psph.scenes.lattice import SERIAL, extent, seed
 
 _NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
 
 
 def soil_positions(scene) -> np.ndarray:
-    """Particle positions: each block's own lattice, then the domain lattice points inside
-    the polygons, meshes and layers (each point once, in lattice order)."""
+    """Positions of all particles: each block's own lattice, then the domain lattice points
+    inside the polygons, meshes and layers (each point once, in lattice order)."""
+    return seed(scene)[0]
+
+
+def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | None = None
+                      ) -> dict[str, np.ndarray]:
+    """Positions, ids and every field's initial value of the particles in `slab` (axis,
+    lo, hi: coordinate along axis in [lo, hi)), default all of them. Collective over the
+    ranks of `reducer` (each passing its own slab)."""
     dx = scene.particles.dx
-    parts = [lattice_block(b.min, b.max, dx) for b in scene.particles.blocks]
-    pa = scene.particles
-    if pa.polygons or pa.meshes or pa.layers:
-        from psph.scene import check_layer_profiles
-        from psph.scenes.profiles import inside_layer
-
-        grid = domain_lattice(scene.domain.min, scene.domain.max, dx)
-        taken = np.zeros(len(grid), bool)
-        for poly in pa.polygons:
-            taken |= inside_polygon(grid, poly.vertices)
-        for mesh in pa.meshes:
-            taken |= inside_mesh(grid, mesh.file)
-        for il, layer in enumerate(pa.layers):
-            taken |= inside_layer(grid, *check_layer_profiles(layer, f"particles.layers[{il}]"))
-        parts.append(grid[taken])
-    return np.concatenate(parts)
-
-
-def initial_particles(scene) -> dict[str, np.ndarray]:
-    """Positions, ids and every field's initial value for all particles of the scene."""
-    dx = scene.particles.dx
-    x = soil_positions(scene)
+    x, key = seed(scene, *(slab or ()), reducer=reducer)
+    bounds = extent(x, reducer)
     n = len(x)
     m = scene.material
     poro = np.full(n, m.porosity)
@@ -48,7 +34,7 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
     # a dry scene (no pore-pressure stages) has empty pores
     rho = (1 - poro) * m.rho_s + (poro * m.rho_l if scene.pressure.scheme != "none" else 0.0)
     data = {
-        "key": np.arange(n, dtype=float),
+        "key": key.astype(float),
         "x": x,
         "poro": poro,
         "poro0": poro.copy(),
@@ -64,11 +50,11 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
     for side in ("left", "right", "bottom", "top"):
         b = getattr(scene.boundaries, side)
         if b.flow == "drained":
-            layer = surface_layer(x, side, dx)
+            layer = surface_layer(x, side, dx, bounds)
             data["drained_from"][layer] = np.minimum(data["drained_from"][layer],
                                                      b.drained_from)
     for i, load in enumerate(scene.loads):
-        layer = surface_layer(x, load.side, dx)
+        layer = surface_layer(x, load.side, dx, bounds)
         if load.range is not None:
             along = x[:, 1] if load.side in ("left", "right") else x[:, 0]
             layer &= (along >= load.range[0]) & (along <= load.range[1])
@@ -76,7 +62,7 @@ def initial_particles(scene) -> dict[str, np.ndarray]:
         data["load_index"][layer] = i
         data["traction"][layer] = -normal * dx  # pressure pushes inward over length dx
         data["surface"][layer] = 1.0
-    geostatic(scene, data)
+    geostatic(scene, data, reducer, bounds)
     if scene.initial.undrained_load:
         undrained_load(scene, data)
     return data
@@ -117,7 +103,8 @@ def table_elevation(table, x: np.ndarray) -> np.ndarray:
     return np.interp(x, points[:, 0], points[:, 1])
 
 
-def geostatic(scene, data: dict[str, np.ndarray]) -> None:
+def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
+              bounds: np.ndarray | None = None) -> None:
     """Hydrostatic pore pressure below `initial.water_table` (an elevation, a phreatic
     profile, or "surface": zero at the centres of each column's top particle) and the K0
     effective stress
@@ -126,6 +113,9 @@ def geostatic(scene, data: dict[str, np.ndarray]) -> None:
 
     Total vertical stress sigma_v = -rho g d at depth d (tension positive), and Eq. (2)
     sigma' = sigma + p I gives sigma'_v = -rho g d + p.
+
+    `data` may be one slab's particles: `bounds` (`lattice.extent`) and `reducer` give the
+    smallest and largest x and the column tops of all of them.
     """
     init = scene.initial
     n = len(data["key"])
@@ -134,10 +124,14 @@ def geostatic(scene, data: dict[str, np.ndarray]) -> None:
     dx = scene.particles.dx
     # lattice columns: x = x_min + k dx (rounding x / dx itself would merge neighbouring
     # columns, whose centres sit at half-integers, and shift p by rho_l g dx)
-    column = np.round((x[:, 0] - x[:, 0].min()) / dx).astype(np.int64)
-    top = np.full(column.max() - column.min() + 1, -np.inf)
-    np.maximum.at(top, column - column.min(), x[:, 1])
-    depth = top[column - column.min()] + 0.5 * dx - x[:, 1]
+    if bounds is None:
+        bounds = extent(x, reducer)
+    x_min, x_max = bounds[0, 0], bounds[1, 0]
+    column = np.round((x[:, 0] - x_min) / dx).astype(np.int64)
+    top = np.full(int(np.round((x_max - x_min) / dx)) + 1, -np.inf)
+    np.maximum.at(top, column, x[:, 1])
+    top = reducer.max(top)
+    depth = top[column] + 0.5 * dx - x[:, 1]
     if init.water_table is not None:
         head = depth - 0.5 * dx if init.water_table == "surface" \
             else table_elevation(init.water_table, x[:, 0]) - x[:, 1]

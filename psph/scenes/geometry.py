@@ -1,4 +1,4 @@
-"""Particle generation from scene geometry (global, identical on every rank)."""
+"""Particle generation from scene geometry: lattices, and which points lie inside."""
 
 import numpy as np
 
@@ -13,13 +13,16 @@ def lattice_block(lo, hi, dx: float) -> np.ndarray:
     return np.column_stack([gx.ravel(), gy.ravel()])
 
 
-def surface_layer(x: np.ndarray, side: str, dx: float) -> np.ndarray:
-    """Mask of the outermost particle layer on `side` (left, right, bottom, top)."""
+def surface_layer(x: np.ndarray, side: str, dx: float, bounds: np.ndarray | None = None
+                  ) -> np.ndarray:
+    """Mask of the outermost particle layer on `side` (left, right, bottom, top).
+    `bounds` (2, dim): the smallest and largest coordinates of all particles, when `x`
+    holds only some of them (default: those of `x`)."""
     axis = 0 if side in ("left", "right") else 1
     c = x[:, axis]
     if side in ("right", "top"):
-        return c > c.max() - 0.5 * dx
-    return c < c.min() + 0.5 * dx
+        return c > (c.max() if bounds is None else bounds[1, axis]) - 0.5 * dx
+    return c < (c.min() if bounds is None else bounds[0, axis]) + 0.5 * dx
 
 
 def domain_lattice(lo, hi, dx: float) -> np.ndarray:
@@ -39,6 +42,12 @@ def inside_polygon(points: np.ndarray, vertices) -> np.ndarray:
 
 def inside_mesh(points: np.ndarray, file: str) -> np.ndarray:
     """Mask of the points inside any triangle or quad of a mesh file (read by meshio)."""
+    return inside_triangles(points, *read_mesh(file))
+
+
+def read_mesh(file: str) -> tuple[np.ndarray, np.ndarray]:
+    """(xy (k, 2), triangles (m, 3)) of a mesh file's triangles and quads (each quad as
+    two triangles), read by meshio; SceneError (one line) if it cannot be used."""
     import contextlib
     import io
 
@@ -63,7 +72,11 @@ def inside_mesh(points: np.ndarray, file: str) -> np.ndarray:
             tris += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
     if not tris:
         raise SceneError(f"particles.meshes: {file}: no triangle or quad cells")
-    tri = np.concatenate(tris)
+    return xy, np.concatenate(tris)
+
+
+def inside_triangles(points: np.ndarray, xy: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Mask of the points inside any of the triangles `tri` (vertex indices into xy)."""
     inside = np.zeros(len(points), bool)
     a, b, c = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
     for k in range(len(tri)):  # per cell, only the lattice points in its bounding box

@@ -28,8 +28,24 @@ def undrained_pressure(q: float, half_width: float, x, depth) -> np.ndarray:
 
 
 def loaded_half_width(scene) -> float:
-    """Half-width of the load as discretised: loaded particles on the symmetry side x dx."""
-    from psph.physics.initial import initial_particles
+    """Half-width of the load as discretised: loaded particles on the symmetry side x dx.
+    The loaded particles are those of `surface_layer` (psph/physics/initial.py) within
+    each load's range, seeded here from the outer lattice row only, not all particles."""
+    from psph.scenes.lattice import census, seed
 
-    data = initial_particles(scene)
-    return float(np.sum(data["load_index"] >= 0)) * scene.particles.dx
+    dx = scene.particles.dx
+    loaded = set()
+    for load in scene.loads:
+        axis = 0 if load.side in ("left", "right") else 1
+        values, counts = census(scene, axis)
+        present = values[counts > 0]
+        if load.side in ("right", "top"):  # c > max - dx/2
+            lo, hi = np.nextafter(present.max() - 0.5 * dx, np.inf), np.inf
+        else:  # c < min + dx/2
+            lo, hi = -np.inf, present.min() + 0.5 * dx
+        x, key = seed(scene, axis, lo, hi)
+        if load.range is not None:
+            along = x[:, 1 - axis]
+            key = key[(along >= load.range[0]) & (along <= load.range[1])]
+        loaded.update(key.tolist())
+    return float(len(loaded)) * dx
