@@ -342,13 +342,13 @@ class Scene(_Model):
             raise _Rule("material.model", "elastic",
                         "material.plasticity is given: set model = 'drucker_prager'")
         table = self.initial.water_table
-        if isinstance(table, list) or (isinstance(table, str) and table != "surface"):
-            from psph.scenes.profiles import ProfileError, read_profile
+        if table is not None and table != "surface":
+            from psph.scenes.profiles import ProfileError, check_water_table
 
             try:
-                read_profile(table)
+                check_water_table(table, self.domain.min, self.domain.max)
             except ProfileError as e:
-                where = "" if e.where in ("points", "file") else f" {e.where}"
+                where = "" if e.where in ("points", "file", "level") else f" {e.where}"
                 raise _Rule(f"initial.water_table{where}", e.value, e.rule) from None
         if (self.initial.k0 is not None or self.initial.water_table is not None) \
                 and self.gravity[1] >= 0.0:

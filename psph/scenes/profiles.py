@@ -89,3 +89,27 @@ def inside_layer(points: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.
     zt = np.interp(x, top[:, 0], top[:, 1])
     zb = np.interp(x, bottom[:, 0], bottom[:, 1])
     return within & (z >= zb - eps) & (z <= zt + eps)
+
+
+def check_water_table(table: float | list | str, lo, hi) -> None:
+    """`initial.water_table` as a level or a profile (`read_profile`) lies in the domain
+    [lo, hi]: a level within its height; a profile sharing its x range, with its
+    elevation within the height wherever it is over the domain (at its points there and
+    at the domain's sides)."""
+    if isinstance(table, (int, float)):
+        if not lo[1] <= table <= hi[1]:
+            raise ProfileError("level", table, f"outside the domain's height [{lo[1]:g}, "
+                                               f"{hi[1]:g}] m")
+        return
+    points = read_profile(table)
+    x0, x1 = max(points[0, 0], lo[0]), min(points[-1, 0], hi[0])
+    if x1 < x0:
+        raise ProfileError("points", [points[0, 0], points[-1, 0]],
+                           f"no x in the domain's [{lo[0]:g}, {hi[0]:g}] m")
+    xs = np.concatenate([[x0, x1], points[(points[:, 0] > x0) & (points[:, 0] < x1), 0]])
+    z = np.interp(xs, points[:, 0], points[:, 1])
+    out = np.flatnonzero((z < lo[1]) | (z > hi[1]))
+    if len(out):
+        i = int(out[0])
+        raise ProfileError(f"at x = {xs[i]:g}", float(z[i]),
+                           f"outside the domain's height [{lo[1]:g}, {hi[1]:g}] m")
