@@ -1,5 +1,6 @@
-"""The same run on 1, 2 and 4 ranks gives the same particles, bit for bit, through
-migration and two removals, and so does a restart on another rank count (issue 15).
+"""The same run on 1 and 2 ranks gives the same particles, bit for bit, through migration
+and two removals, and so does its 2-rank checkpoint restarted on 4 ranks (issue 15;
+`make bench-ranks` compares whole runs on 1 to 4 ranks).
 
 The 2- and 4-rank runs are `mpirun` subprocesses of the command line, as a user starts
 them (4 ranks share this machine's 2 cores: slower, not different)."""
@@ -32,16 +33,15 @@ def _mpirun(ranks: int, scene, out, *extra: str, restart=None) -> None:
     assert res.returncode == 0, res.stderr[-2000:]
 
 
-def test_one_two_and_four_ranks_and_a_restart_on_another_count_agree(tmp_path):
+def test_one_and_two_ranks_and_a_restart_on_four_agree(tmp_path):
     from mpi4py import MPI
 
     scene = falling_far(tmp_path)
     run(load_scene(str(scene), SETTINGS), tmp_path / "one", comm=MPI.COMM_SELF, quiet=True)
-    _mpirun(4, scene, tmp_path / "four")
     _mpirun(2, scene, tmp_path / "two", *CHECKPOINT)
     shutil.copytree(tmp_path / "two", tmp_path / "two_then_four")
     _mpirun(4, scene, tmp_path / "two_then_four", *CHECKPOINT,
             restart=tmp_path / "two_then_four" / "checkpoint.h5")
     one = tmp_path / "one" / "particles.h5"
-    for other in ("four", "two", "two_then_four"):
+    for other in ("two", "two_then_four"):
         assert compare_runs(one, tmp_path / other / "particles.h5") is None, other
