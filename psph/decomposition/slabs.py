@@ -1,5 +1,6 @@
 """Slabs along one axis, one per rank: halo exchange and migration every step, load
-balancing (recut + redistribute) when the work gets uneven, and the particle census.
+balancing (recut + redistribute) when the work gets uneven. The particle census is in
+census.py.
 
 Each rank owns the particles whose coordinate along `axis` lies in [lo, hi). Every step,
 `exchange` sends to each neighbour rank in one message the particles that left the slab
@@ -12,7 +13,6 @@ import numpy as np
 from mpi4py import MPI
 
 from psph.decomposition.balance import balanced_cuts
-from psph.errors import NumericalError
 from psph.kernels.exact_sum import exact_total
 from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
 from psph.particles import ParticleStore
@@ -370,35 +370,6 @@ class Slabs:
         store.ensure(n_new + 64)
         unpack_rows(recv, n_new, store.all_rows, 0)
         store.n_owned = n_new
-
-    # --------------------------------------------------------------- census
-
-    def allgather_ids(self, ids: np.ndarray) -> np.ndarray:
-        """The concatenation of every rank's `ids` (collective)."""
-        return np.concatenate(self.comm.allgather(np.asarray(ids, np.int64)))
-
-    def check_census(self, store: ParticleStore, alive: np.ndarray, step: int, t: float
-                     ) -> None:
-        """Every id with alive[id] is owned by exactly one rank and no other id by any
-        (collective); raises NumericalError naming the first id lost or duplicated."""
-        n_ids = len(alive)
-        keys = store.key[:store.n_owned].astype(np.int64)
-        local = np.bincount(keys[(keys >= 0) & (keys < n_ids)],
-                            minlength=n_ids).astype(np.int32)
-        stray = int(np.count_nonzero((keys < 0) | (keys >= n_ids)))
-        total = np.empty_like(local)
-        self.comm.Allreduce(local, total, op=MPI.SUM)
-        stray = self.comm.allreduce(stray, op=MPI.SUM)
-        expected = alive.astype(np.int32)
-        if stray or not np.array_equal(total, expected):
-            bad = np.flatnonzero(total != expected)
-            pid = int(bad[0]) if len(bad) else -1
-            count = int(total[pid]) if len(bad) else 0
-            raise NumericalError(
-                f"step {step}, t = {t:.6g} s, particle id {pid}: field id (owned by {count} "
-                f"ranks instead of {int(expected[pid]) if len(bad) else 1}; {len(bad)} ids "
-                f"wrong, {stray} unknown ids) - "
-                "particles lost or duplicated in migration")
 
     # --------------------------------------------------------------- reductions
 
