@@ -130,8 +130,8 @@ class Census:
             return np.searchsorted(starts, a, side="right") - 1
 
         owned = np.bincount(_to_owner(comm, ids, owner(ids)) - lo, minlength=hi - lo)
-        removed = np.bincount(_to_owner(comm, self.removed, owner(self.removed)) - lo,
-                              minlength=hi - lo)
+        gone = self.removed[(self.removed >= 0) & (self.removed < self.n_ids)]
+        removed = np.bincount(_to_owner(comm, gone, owner(gone)) - lo, minlength=hi - lo)
         bad = np.flatnonzero(owned + removed != 1)
         first = (lo + int(bad[0]), int(owned[bad[0]]), max(1 - int(removed[bad[0]]), 0)) \
             if len(bad) else None

@@ -20,6 +20,7 @@ An older psph restarts a new checkpoint only if nothing was removed (it reads a 
 
 import json
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import h5py
@@ -165,7 +166,8 @@ def _agree(comm, fn, *args, close=None):
 
 
 def read_restart(path: Path, comm, axis: int, min_width: float, chunk: int = CHUNK_ROWS,
-                 check=None) -> tuple[dict, np.ndarray, dict[str, np.ndarray], np.ndarray]:
+                 check: Callable[[dict], None] | None = None
+                 ) -> tuple[dict, np.ndarray, dict[str, np.ndarray], np.ndarray]:
     """Collective: (meta, slab cuts, this rank's particles, this rank's share of the
     removed ids) of the checkpoint `path`. Each rank reads the rows of its share of the
     file, `chunk` rows at a time; the cuts are `slab_cuts` of all positions along `axis`
