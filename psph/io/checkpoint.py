@@ -34,7 +34,8 @@ from psph.particles import ADDED_FIELDS, FIELDS
 FORMAT = "psph-checkpoint-1"
 
 
-CHUNK_ROWS = 1 << 20  # rows read at a time on a restart
+CHUNK_ROWS = 1 << 20  # rows of one column read at a time on a restart
+EXCHANGE_BYTES = 1 << 23  # a restart's chunk of whole rows, read and sent at a time
 
 
 def write_checkpoint(path: Path, comm, store, meta: dict, history: list[dict] | None = None,
@@ -234,6 +235,7 @@ def _to_owners(f: h5py.File, comm, dest: np.ndarray, lo: int, chunk: int, unread
     out = {nm: np.zeros((int(recv_total.sum()),) + ((k,) if k > 1 else ()))
            for nm, k in zip(names, widths, strict=True)}
     at = np.concatenate(([0], np.cumsum(recv_total)[:-1]))  # next row from each source
+    chunk = max(1, min(chunk, EXCHANGE_BYTES // (8 * w)))
     rounds = comm.allreduce(-(-len(dest) // chunk), op=MPI.MAX)
     for i in range(rounds):
         a, b = min(i * chunk, len(dest)), min((i + 1) * chunk, len(dest))
@@ -249,12 +251,13 @@ def _to_owners(f: h5py.File, comm, dest: np.ndarray, lo: int, chunk: int, unread
         rd = np.concatenate(([0], np.cumsum(recv_counts)[:-1])) * w
         comm.Alltoallv([send, (send_counts * w, sd), MPI.DOUBLE],
                        [recv, (recv_counts * w, rd), MPI.DOUBLE])
-        src = np.repeat(np.arange(size), recv_counts)
-        row = at[src] + (np.arange(len(src)) - rd[src] // w)
+        for s_ in range(size):  # each source's rows, in its order, after the earlier ones
+            m = int(recv_counts[s_])
+            r0 = int(rd[s_]) // w
+            for j, nm in enumerate(names):
+                out[nm][at[s_]:at[s_] + m] = recv[r0:r0 + m, col[j]:col[j + 1]].reshape(
+                    (m,) + out[nm].shape[1:])
         at += recv_counts
-        for j, nm in enumerate(names):
-            out[nm][row] = recv[:len(src), col[j]:col[j + 1]].reshape(
-                (len(src),) + out[nm].shape[1:])
     return out
 
 
