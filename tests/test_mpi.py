@@ -334,3 +334,29 @@ def test_restart_reads_only_this_ranks_share(tmp_path_factory, old):
     census.check(mine["key"], 0, 0.0)  # every id once, or removed
     problems = sum(comm.allgather(problems), [])
     assert not problems, problems
+
+
+@pytest.mark.mpi(min_size=2)
+def test_a_restart_read_failing_on_one_rank_stops_every_rank(tmp_path_factory, monkeypatch):
+    """A read error on rank 1 only (its share of the rows): every rank raises the same
+    SceneError (exit 2) instead of waiting in the next collective."""
+    from mpi4py import MPI
+
+    import psph.io.checkpoint as ck
+    from psph.errors import SceneError
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        _synthetic_checkpoint(out / "checkpoint.h5", 2000, False)
+    comm.Barrier()
+    original = ck._pack_chunk
+
+    def failing(f, a, b, order, send, col, unreadable):
+        if comm.Get_rank() == 1:  # as _pack_chunk turns h5py's OSError into one line
+            raise unreadable(OSError("Can't read data (simulated)"))
+        return original(f, a, b, order, send, col, unreadable)
+
+    monkeypatch.setattr(ck, "_pack_chunk", failing)
+    with pytest.raises(SceneError, match="unreadable checkpoint .Can't read data"):
+        ck.read_restart(out / "checkpoint.h5", comm, 0, 0.05, chunk=500)
