@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts, slab_cuts
-from psph.errors import EARLY_STOP_SIGNALS, Interrupted, OutputError, SceneError
-from psph.io.checkpoint import read_checkpoint, read_history, write_checkpoint
+from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts
+from psph.errors import EARLY_STOP_SIGNALS, Interrupted, NumericalError, OutputError, SceneError
+from psph.io.checkpoint import read_history, read_restart, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
 from psph.io.space import SNAPSHOT_ROW_BYTES, require_space
 from psph.kernels.update import SCHEME_NONE, SCHEME_PROJECTION
@@ -34,19 +34,34 @@ def _slab_axis(scene: Scene) -> int:
     return int(np.argmax(ext))
 
 
-def make_slabs(scene: Scene, comm=None, x: np.ndarray | None = None) -> Slabs:
-    """Slabs with equal particle counts for the positions `x` (all particles, on every
-    rank), default the initial ones: counted per lattice coordinate, each rank counting
-    a share of the lattice, never built whole (collective)."""
+def make_slabs(scene: Scene, comm=None) -> Slabs:
+    """Slabs with equal counts of the initial particles: counted per lattice coordinate,
+    each rank counting a share of the lattice, never built whole (collective)."""
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD if comm is None else comm
     axis = _slab_axis(scene)
     width = 2.0 * scene.h
-    if x is not None:
-        return Slabs(axis, slab_cuts(x[:, axis], comm.Get_size(), width), comm)
     values, counts = census(scene, axis, CommReducer(comm))
     return Slabs(axis, cuts_from_counts(values, counts, comm.Get_size(), width), comm)
+
+
+def _read_restart(path: Path, scene: Scene, comm) -> tuple[dict, dict]:
+    """(meta, {"cuts", "particles": this rank's rows, "removed": its share of the removed
+    ids}) of the checkpoint `path`, whose physics must be the scene's (collective)."""
+    meta, cuts, particles, removed = read_restart(
+        path, comm, _slab_axis(scene), 2.0 * scene.h,
+        check=lambda meta: check_restart_scene(meta["scene"], scene, f"--restart {path}"))
+    return meta, {"cuts": cuts, "particles": particles, "removed": removed}
+
+
+def _check_restart_census(sim: Simulation, path: Path) -> None:
+    """The checkpoint's particles are its ids once each (collective; SceneError, exit 2,
+    on every rank if not)."""
+    try:
+        sim.census.check(sim.store.key[:sim.store.n_owned], sim.step, sim.t)
+    except NumericalError as e:
+        raise SceneError(f"--restart {path}: corrupt checkpoint ({e})") from None
 
 
 def snapshot_times(scene: Scene) -> list[float]:
@@ -132,10 +147,10 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     wall0 = time.perf_counter()  # set-up: checkpoint read, slab cuts, particles, ghosts
     meta, state = None, None
     if restart is not None:  # read and check before anything is written
-        meta, state = read_checkpoint(restart)
-        check_restart_scene(meta["scene"], scene, f"--restart {restart}")
+        meta, state = _read_restart(restart, scene, comm)
     check_output_directory(out, comm)
-    slabs = make_slabs(scene, comm, None if state is None else state["x"])
+    slabs = make_slabs(scene, comm) if state is None \
+        else Slabs(_slab_axis(scene), state["cuts"], comm)
     rank0 = slabs.rank == 0
     toml_text = to_toml(scene)
     if rank0:
@@ -148,10 +163,10 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         n = sim.store.n_owned
         probes = probe_ids(scene, sim.store.x[:n], sim.store.key[:n], slabs.reducer)
     else:
-        alive = state.pop("alive")
-        mine = slabs.owned_mask(state["x"])
-        sim = Simulation(scene, slabs, {k: v[mine] for k, v in state.items()}, t=meta["t"],
-                         step=meta["step"], alive=alive, removals_done=meta["removals_done"])
+        sim = Simulation(scene, slabs, state["particles"], t=meta["t"], step=meta["step"],
+                         n_ids=meta["n_ids"], removed=state["removed"],
+                         removals_done=meta["removals_done"])
+        _check_restart_census(sim, restart)
         probes = probe_ids(scene, reducer=slabs.reducer, slab=slabs.slab)
     del state
     writer = SnapshotWriter(out / "particles.h5", comm, scene.dim, toml_text,
@@ -218,7 +233,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     loop0 = time.perf_counter()
 
     def snapshot():
-        slabs.check_census(sim.store, sim.alive, sim.step, sim.t)
+        sim.census.check(sim.store.key[:sim.store.n_owned], sim.step, sim.t)
         side = side_files_bytes() if rank0 else 0
         guarded_write(out / "particles.h5", sim.n_global * SNAPSHOT_ROW_BYTES + side,
                       lambda: writer.write(sim.step, sim.t, sim.store))
@@ -249,10 +264,11 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
                 "next_hist": next_hist, "scene": toml_text,
                 "monitor": None if monitor is None else monitor.state(),
                 "ranks": slabs.size}
-        nbytes = 8 * sim.n_global * sim.store.row_width + sim.n_ids + 400 * len(history)
+        nbytes = 8 * sim.n_global * sim.store.row_width + 8 * (sim.n_ids - sim.n_global) \
+            + 400 * len(history)
         guarded_write(ck_path, nbytes, lambda: write_checkpoint(
             ck_path, comm, sim.store, info, history=history if rank0 else None,
-            alive=sim.alive))
+            removed=sim.census.removed))
         last_ck_wall = time.perf_counter()
         last_ck = (sim.step, sim.t, ck_path)
 

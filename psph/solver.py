@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psph.decomposition.census import Census
 from psph.drainage import Drainage
 from psph.errors import NumericalError
 from psph.kernels.artificial_stress import artificial_stress
@@ -74,11 +75,13 @@ class Simulation:
     """State, pipeline and clock of one run on this rank."""
 
     def __init__(self, scene: Scene, slabs, particles: dict | None = None, t: float = 0.0,
-                 step: int = 0, alive: np.ndarray | None = None, removals_done: int = 0):
+                 step: int = 0, n_ids: int | None = None, removed: np.ndarray | None = None,
+                 removals_done: int = 0):
         """`particles`: this rank's rows of every particle field (those of a checkpoint in
         its slab) with the clock (t, step) they belong to; default: the scene's initial
         particles of this rank's slab at t = 0, seeded here (no rank builds them all).
-        `alive`: which of the initial ids are still in the run (a checkpoint's), and
+        `n_ids`: how many ids the run created (default: all particles), `removed`: this
+        rank's share of the ids removed so far (a checkpoint's; see Census), and
         `removals_done`: how many `remove` regions were applied already. Collective."""
         self.scene = scene
         self.slabs = slabs
@@ -93,8 +96,9 @@ class Simulation:
         data = initial_particles(scene, slabs.reducer, slabs.slab) if fresh else particles
         n_local = len(data["key"])
         self.n_global = int(slabs.reducer.sum(np.array([n_local], np.int64))[0])
-        self.alive = np.ones(self.n_global, np.bool_) if alive is None else alive.astype(bool)
-        self.n_ids = len(self.alive)  # ids run 0..n_ids-1; removed ones are not alive
+        # ids run 0..n_ids-1; each is owned once or removed once (checked at snapshots)
+        self.census = Census(slabs.comm, self.n_global if n_ids is None else n_ids, removed)
+        self.n_ids = self.census.n_ids
         self.removals = sorted(scene.remove, key=lambda r: r.at)
         self.removals_done = removals_done
         self.store = ParticleStore(2 * n_local + 256)
@@ -450,16 +454,15 @@ class Simulation:
                 inside = inside_polygon(x, rm.polygon)
             else:
                 inside = np.all((x >= np.array(rm.min)) & (x <= np.array(rm.max)), axis=1)
-            ids = self.slabs.allgather_ids(st.key[:n][inside].astype(np.int64))
+            ids = st.key[:n][inside].astype(np.int64)
             keep = np.flatnonzero(~inside)
             for a in st.all_rows:
                 a[:len(keep)] = a[keep]
             st.n_owned = len(keep)
             st.n_halo = st.n_ghost = 0
-            self.alive[ids] = False
-            self.n_global = int(self.alive.sum())
+            removed += self.census.remove(ids)
+            self.n_global = self.census.n_alive
             self.removals_done += 1
-            removed += len(ids)
         return removed
 
     def advance_one(self) -> None:

@@ -252,3 +252,111 @@ def test_each_rank_seeds_only_its_slab(tmp_path_factory):
     problems = sum(comm.allgather(problems), [])  # every rank learns every verdict
     assert not problems, problems
     assert comm.allreduce(len(local["key"])) == len(whole["key"]) > 40000
+
+
+def _synthetic_checkpoint(path: Path, n: int, old: bool) -> None:
+    """A checkpoint of `n` particles at random positions with ids 0..n+9 but for ten
+    removed (as `removed_ids`, or as an older file's `alive` mask)."""
+    import h5py
+
+    from psph.io.checkpoint import FORMAT
+    from psph.particles import FIELDS
+
+    rng = np.random.default_rng(5)
+    keep = np.sort(rng.permutation(n + 10)[:n])
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = FORMAT
+        f.attrs["complete"] = 1
+        meta = {"n_global": n, "n_ids": n + 10, "t": 0.0, "step": 0}
+        f.attrs["meta"] = json.dumps(meta)
+        g = f.create_group("particles")
+        for fld in FIELDS:
+            g[fld.name] = rng.random((n, fld.ncomp) if fld.ncomp > 1 else n)
+        g["key"][...] = keep[rng.permutation(n)]
+        g["x"][:, 0] = np.round(g["x"][:, 0], 2)  # columns of equal coordinates too
+        alive = np.ones(n + 10, np.uint8)
+        alive[keep] = 0
+        alive = 1 - alive
+        if old:
+            f["alive"] = alive
+        else:
+            f["removed_ids"] = np.flatnonzero(alive == 0)[::-1]
+
+
+@pytest.mark.mpi(min_size=2)
+@pytest.mark.parametrize("old", [False, True])
+def test_restart_reads_only_this_ranks_share(tmp_path_factory, old):
+    """Distributed restart (issue 15): each rank gets exactly its slab's rows, in the
+    file's order, the cuts are `slab_cuts` of all positions bit for bit, the removed ids
+    are split over the ranks (also from an older checkpoint's `alive` mask), and the
+    traced peak of the read is about this rank's share of reading the file whole."""
+    import tracemalloc
+
+    from mpi4py import MPI
+
+    from psph.decomposition.census import Census
+    from psph.decomposition.slabs import slab_cuts
+    from psph.io.checkpoint import read_checkpoint, read_restart
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    n = 60000
+    if comm.Get_rank() == 0:
+        _synthetic_checkpoint(out / "checkpoint.h5", n, old)
+    comm.Barrier()
+    read_restart(out / "checkpoint.h5", comm, 0, 0.05)  # imports, outside the trace
+    tracemalloc.start()
+    meta, cuts, mine, removed = read_restart(out / "checkpoint.h5", comm, 0, 0.05,
+                                             chunk=n // 40)
+    split_peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    tracemalloc.start()
+    _, whole = read_checkpoint(out / "checkpoint.h5")
+    whole_peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+
+    problems = []
+    c = whole["x"][:, 0]
+    if cuts.tobytes() != slab_cuts(c, comm.Get_size(), 0.05).tobytes():
+        problems.append(f"cuts {cuts}")
+    owned = (c >= cuts[comm.Get_rank()]) & (c < cuts[comm.Get_rank() + 1])
+    problems += [f"field {k} differs" for k in mine
+                 if mine[k].tobytes() != whole[k][owned].tobytes()]
+    all_removed = np.sort(np.concatenate(comm.allgather(removed)))
+    if not np.array_equal(all_removed, np.sort(whole["removed_ids"])) or \
+            len(all_removed) != 10 or meta["n_removed"] != 10:
+        problems.append(f"removed ids {all_removed}")
+    share = owned.sum() / n
+    if split_peak > (share + 0.2) * whole_peak:
+        problems.append(f"restart read peak {split_peak} B for {share:.2f} of the "
+                        f"particles, {whole_peak} B for all")
+    census = Census(comm, meta["n_ids"], removed)
+    census.check(mine["key"], 0, 0.0)  # every id once, or removed
+    problems = sum(comm.allgather(problems), [])
+    assert not problems, problems
+
+
+@pytest.mark.mpi(min_size=2)
+def test_a_restart_read_failing_on_one_rank_stops_every_rank(tmp_path_factory, monkeypatch):
+    """A read error on rank 1 only (its share of the rows): every rank raises the same
+    SceneError (exit 2) instead of waiting in the next collective."""
+    from mpi4py import MPI
+
+    import psph.io.checkpoint as ck
+    from psph.errors import SceneError
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        _synthetic_checkpoint(out / "checkpoint.h5", 2000, False)
+    comm.Barrier()
+    original = ck._pack_chunk
+
+    def failing(f, a, b, order, send, col, unreadable):
+        if comm.Get_rank() == 1:  # as _pack_chunk turns h5py's OSError into one line
+            raise unreadable(OSError("Can't read data (simulated)"))
+        return original(f, a, b, order, send, col, unreadable)
+
+    monkeypatch.setattr(ck, "_pack_chunk", failing)
+    with pytest.raises(SceneError, match="unreadable checkpoint .Can't read data"):
+        ck.read_restart(out / "checkpoint.h5", comm, 0, 0.05, chunk=500)

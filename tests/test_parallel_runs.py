@@ -108,26 +108,34 @@ def test_load_balancing_keeps_imbalance_under_1_1(falling_runs):
 
 @pytest.mark.mpi(min_size=2)
 def test_census_names_a_lost_or_duplicated_particle():
-    from psph.decomposition.slabs import Slabs
-    from psph.particles import ParticleStore
+    """The census compares counts and checksums of the owned ids; when they do not match,
+    its second pass names the id owned by the wrong number of ranks, also after a
+    removal (a removed id is expected nowhere)."""
+    from psph.decomposition.census import Census
 
     comm = _world()
     rank = comm.Get_rank()
-    slabs = Slabs(0, np.array([-np.inf, 0.0, np.inf]), comm)
     n = 10
     mine = np.arange(n)[np.arange(n) % 2 == rank]
-    store = ParticleStore(32)
-    store.load({"key": mine.astype(float)})
-    alive = np.ones(n, bool)
-    slabs.check_census(store, alive, 0, 0.0)  # all there: no error
+    census = Census(comm, n)
+    census.check(mine, 0, 0.0)  # all there: no error
     dup = np.append(mine, 3) if rank == 0 else mine  # id 3 lives on rank 1 too
-    store.load({"key": dup.astype(float)})
     with pytest.raises(NumericalError, match="particle id 3: field id .owned by 2 ranks"):
-        slabs.check_census(store, alive, 7, 0.5)
+        census.check(dup, 7, 0.5)
     lost = mine[mine != 4]
-    store.load({"key": lost.astype(float)})
     with pytest.raises(NumericalError, match="particle id 4: field id .owned by 0 ranks"):
-        slabs.check_census(store, alive, 7, 0.5)
+        census.check(lost, 7, 0.5)
+    swapped = np.where(mine == 4, 6, mine)  # 4 lost and 6 twice: the count is right
+    with pytest.raises(NumericalError, match="particle id 4: field id .owned by 0 ranks"):
+        census.check(swapped, 7, 0.5)
+    with pytest.raises(NumericalError, match="particle id -1: .* 1 unknown ids"):
+        census.check(np.append(mine, n) if rank == 1 else mine, 7, 0.5)
+    gone = mine[mine >= 6]
+    assert census.remove(mine[mine < 6]) == 6
+    census.check(gone, 8, 0.6)  # the removed ones are expected nowhere
+    with pytest.raises(NumericalError, match="particle id 2: field id .owned by 1 ranks "
+                                             "instead of 0"):
+        census.check(np.append(gone, 2) if rank == 0 else gone, 8, 0.6)
 
 
 @pytest.mark.mpi(min_size=2)

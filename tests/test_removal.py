@@ -44,9 +44,29 @@ def test_restart_across_a_removal_is_bitwise(tmp_path):
                                  "checkpoint.at_end=false"])
     run(scene, tmp_path / "full", comm=MPI.COMM_SELF, quiet=True)
     meta, state = read_checkpoint(tmp_path / "full" / "checkpoint.h5")
-    assert meta["removals_done"] == 1 and not state["alive"].all()  # between the two
+    assert meta["removals_done"] == 1 and meta["n_removed"] > 0  # between the two
+    assert len(state["removed_ids"]) == meta["n_removed"] == meta["n_ids"] - len(state["key"])
     shutil.copytree(tmp_path / "full", tmp_path / "again")
-    run(scene, tmp_path / "again", comm=MPI.COMM_SELF, quiet=True,
-        restart=tmp_path / "again" / "checkpoint.h5")
-    assert compare_runs(tmp_path / "full" / "particles.h5",
-                        tmp_path / "again" / "particles.h5") is None
+    shutil.copytree(tmp_path / "full", tmp_path / "old")
+    _as_older_checkpoint(tmp_path / "old" / "checkpoint.h5")
+    for name in ("again", "old"):
+        run(scene, tmp_path / name, comm=MPI.COMM_SELF, quiet=True,
+            restart=tmp_path / name / "checkpoint.h5")
+        assert compare_runs(tmp_path / "full" / "particles.h5",
+                            tmp_path / name / "particles.h5") is None, name
+
+
+def _as_older_checkpoint(path) -> None:
+    """Rewrite a checkpoint as psph wrote it before issue 15: the `alive` mask (one uint8
+    per id) instead of `removed_ids`, and no `n_removed` in meta."""
+    import json
+
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        meta = json.loads(f.attrs["meta"])
+        alive = np.ones(meta.pop("n_removed") + meta["n_global"], np.uint8)
+        alive[f["removed_ids"][()]] = 0
+        del f["removed_ids"]
+        f["alive"] = alive
+        f.attrs["meta"] = json.dumps(meta)

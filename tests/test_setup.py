@@ -174,3 +174,22 @@ def test_loaded_half_width_needs_only_the_outer_row(tmp_path):
     for scene in (load_scene("strip_footing"), load_scene(mixed_scene(tmp_path))):
         loaded = initial_particles(scene)["load_index"] >= 0
         assert loaded_half_width(scene) == float(np.sum(loaded)) * scene.particles.dx
+
+
+def test_distributed_cuts_are_slab_cuts():
+    """The cuts from the order statistics of coordinates split over ranks (here one) are
+    `slab_cuts`' bit for bit, with repeated values and zeros of either sign."""
+    from mpi4py import MPI
+
+    from psph.decomposition.slabs import distributed_cuts
+
+    rng = np.random.default_rng(3)
+    for trial in range(60):
+        n = int(rng.integers(1, 400))
+        c = [rng.normal(size=n), np.round(rng.normal(size=n), 1),
+             rng.integers(-3, 3, size=n) * 0.1][trial % 3] * 10.0 ** rng.integers(-3, 4)
+        size, width = int(rng.integers(1, 8)), float(rng.choice([0.0, 0.05, 0.3]))
+        got = distributed_cuts(c, size, width, MPI.COMM_SELF)
+        want = slab_cuts(c, size, width)
+        assert np.array_equal(got, want), (trial, got, want)
+        assert got.tobytes() == want.tobytes() or 0.0 in want  # the sign of a zero cut

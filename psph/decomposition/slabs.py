@@ -1,5 +1,6 @@
 """Slabs along one axis, one per rank: halo exchange and migration every step, load
-balancing (recut + redistribute) when the work gets uneven, and the particle census.
+balancing (recut + redistribute) when the work gets uneven. The particle census is in
+census.py.
 
 Each rank owns the particles whose coordinate along `axis` lies in [lo, hi). Every step,
 `exchange` sends to each neighbour rank in one message the particles that left the slab
@@ -12,7 +13,6 @@ import numpy as np
 from mpi4py import MPI
 
 from psph.decomposition.balance import balanced_cuts
-from psph.errors import NumericalError
 from psph.kernels.exact_sum import exact_total
 from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
 from psph.particles import ParticleStore
@@ -57,6 +57,57 @@ def cuts_from_counts(values: np.ndarray, counts: np.ndarray, nranks: int,
         for r in range(2, nranks):
             cuts[r] = max(cuts[r], cuts[r - 1] + min_width)
     return cuts
+
+
+def _ordered_keys(values: np.ndarray) -> np.ndarray:
+    """int64 keys ordered as the float64 `values` (no NaN): the sign bit flips the rest;
+    -0.0 counts as 0.0 (np.sort leaves their order open: a cut there may then differ from
+    `slab_cuts`' in the sign of zero only, which owns the same particles)."""
+    bits = (np.asarray(values, np.float64) + 0.0).view(np.int64)
+    return np.where(bits < 0, bits ^ np.int64(0x7FFFFFFFFFFFFFFF), bits)
+
+
+def _key_value(keys: np.ndarray) -> np.ndarray:
+    bits = np.where(keys < 0, keys ^ np.int64(0x7FFFFFFFFFFFFFFF), keys)
+    return bits.astype(np.int64).view(np.float64)
+
+
+def order_statistics(coords: np.ndarray, ks: np.ndarray, comm) -> np.ndarray:
+    """c[ks] of the sorted concatenation c of every rank's `coords` (exact; collective):
+    a bisection on the float bits, each step one reduction of len(ks) counts."""
+    keys = np.sort(_ordered_keys(coords))
+    ks = np.asarray(ks, np.int64)
+    big = np.iinfo(np.int64)
+    first = comm.allreduce(int(keys[0]) if len(keys) else big.max, op=MPI.MIN)
+    last = comm.allreduce(int(keys[-1]) if len(keys) else big.min, op=MPI.MAX)
+    lo = np.full(len(ks), first, np.int64)
+    hi = np.full(len(ks), last, np.int64)  # the answer lies in [lo, hi] (every rank's)
+    while np.any(lo < hi):
+        mid = (lo >> 1) + (hi >> 1) + (lo & hi & 1)  # no overflow
+        below = np.searchsorted(keys, mid, side="right").astype(np.int64)
+        comm.Allreduce(below.copy(), below, op=MPI.SUM)
+        enough = below > ks  # at least k + 1 values <= mid: c[k] <= mid
+        hi = np.where(enough, mid, hi)
+        lo = np.where(enough, lo, mid + 1)
+    return _key_value(lo)
+
+
+def distributed_cuts(coords: np.ndarray, nranks: int, min_width: float, comm
+                     ) -> np.ndarray:
+    """`slab_cuts` of every rank's `coords` together, bit for bit, without gathering
+    them (collective on `comm`, cutting for `nranks`): the few order statistics the cuts
+    read are found by `order_statistics`, then `cuts_from_counts` runs on a histogram in
+    which each particle counts at the next of them in sorted order (the values between
+    are never read)."""
+    n = int(comm.allreduce(len(coords), op=MPI.SUM))
+    if nranks == 1:
+        return slab_cuts(np.zeros(0), 1, min_width)
+    ks = np.array([min(max(r * n // nranks, 1), n - 1) for r in range(1, nranks)])
+    ks = np.unique(np.concatenate([(ks - 1) % n, ks % n]))
+    values = order_statistics(coords, ks, comm)
+    counts = np.diff(np.concatenate(([-1], ks)))
+    counts[-1] += n - 1 - ks[-1]
+    return cuts_from_counts(values, counts, nranks, min_width)
 
 
 class CommReducer:
@@ -319,35 +370,6 @@ class Slabs:
         store.ensure(n_new + 64)
         unpack_rows(recv, n_new, store.all_rows, 0)
         store.n_owned = n_new
-
-    # --------------------------------------------------------------- census
-
-    def allgather_ids(self, ids: np.ndarray) -> np.ndarray:
-        """The concatenation of every rank's `ids` (collective)."""
-        return np.concatenate(self.comm.allgather(np.asarray(ids, np.int64)))
-
-    def check_census(self, store: ParticleStore, alive: np.ndarray, step: int, t: float
-                     ) -> None:
-        """Every id with alive[id] is owned by exactly one rank and no other id by any
-        (collective); raises NumericalError naming the first id lost or duplicated."""
-        n_ids = len(alive)
-        keys = store.key[:store.n_owned].astype(np.int64)
-        local = np.bincount(keys[(keys >= 0) & (keys < n_ids)],
-                            minlength=n_ids).astype(np.int32)
-        stray = int(np.count_nonzero((keys < 0) | (keys >= n_ids)))
-        total = np.empty_like(local)
-        self.comm.Allreduce(local, total, op=MPI.SUM)
-        stray = self.comm.allreduce(stray, op=MPI.SUM)
-        expected = alive.astype(np.int32)
-        if stray or not np.array_equal(total, expected):
-            bad = np.flatnonzero(total != expected)
-            pid = int(bad[0]) if len(bad) else -1
-            count = int(total[pid]) if len(bad) else 0
-            raise NumericalError(
-                f"step {step}, t = {t:.6g} s, particle id {pid}: field id (owned by {count} "
-                f"ranks instead of {int(expected[pid]) if len(bad) else 1}; {len(bad)} ids "
-                f"wrong, {stray} unknown ids) - "
-                "particles lost or duplicated in migration")
 
     # --------------------------------------------------------------- reductions
 
