@@ -7,9 +7,7 @@ core, and unaffected by other jobs sharing the machine; the wall time is recorde
 The explicit scheme runs at its stable dt (Eq. 42); TPI sweeps dt (R = dt / dt_Eq42) and
 alpha, with its impervious loading stage explicit (as in the paper); the projection
 sweeps dt from R = 8.8 to four times the solid cap Eq. (41) at CG tolerances 1e-6 and
-1e-9, and
-solves the loading stage too. Per case: the time
-of the run and the error
+1e-9, and solves the loading stage too. Per case: the time of the run and the error
 against the analytical solution: max |p - p_a| / q over T_v = 0.1, 0.2, 0.5, and the max
 settlement error / final settlement over T_v in [0.1, 0.5].
 
