@@ -15,9 +15,11 @@ elastic TPI block at dx = 0.01, h = 1.3 dx, slabs along its long side):
 The model of one step on P ranks (one core each), N particles, a slab face of F particles
 (the section's height over dx) and a halo of `rows` lattice rows per face:
 
-    T(P) = c (1 + s) (N / P) + c_h (2 F rows) + m (alpha + b / beta) + k ceil(log2 P) alpha_c
+    T(P) = c (1 + s) (N / P) + c_h (2 F rows) + 2 (m alpha + b F rows / beta)
+           + k ceil(log2 P) alpha_c
 
-with m messages of b bytes per step per rank (two faces) and k collectives. It is checked
+with m messages per face and step, b bytes per halo particle (two faces, one on 2 ranks)
+and k collectives. It is checked
 against the measured 1-, 2- and 4-rank times (4 ranks share the 2 cores here: the compute
 part is counted twice). The section for the table: an aspect ratio L / H = 10 (a hillslope
 cross-section), slabs along L, so F = sqrt(N / 10); the slab width L / P may not fall below
@@ -25,7 +27,7 @@ the halo width 2h (`slab_cuts`), which caps P. Cluster network: the measured lat
 bandwidth of this machine (shared memory) and, as stated assumptions, an InfiniBand-class
 interconnect (alpha = 2 us, beta = 10 GB/s, alpha_c = 3 us per tree level).
 
-    .venv/bin/python bench/scaling_model.py            # measures (about 2 min), then models
+    .venv/bin/python bench/scaling_model.py            # measures (about 75 s), then models
     .venv/bin/python bench/scaling_model.py --model-only   # from bench/out/scaling_model.json
 
 Prints the tables, writes bench/out/scaling_model.json and bench/out/scaling_model.png.

@@ -137,8 +137,10 @@ class PressureSolve:
         nt = st.n_total
         operator_diagonal(n, npairs, sim.pairs, wd, st.vol, a["storage"], a["diag"])
         # warm start: the last two increments extrapolated, 2 (p^n - p^(n-1)) - (p^(n-1) -
-        # p^(n-2)) (mean CG iterations 18.9 -> 6.8 on the paper's column to 0.4 s at twice
-        # the solid cap, the same p); imposed rows at their value
+        # p^(n-2)) (mean CG iterations 6.7 -> 2.9 on the paper's column at the solid cap,
+        # tol 1e-6, the same p); with dp_prev = 0 (the first projection step after an
+        # explicit stage, an older checkpoint) the guess is 2 (p^n - p^(n-1)), a guess
+        # only; imposed rows at their value
         d = dp[:, 0]
         np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
         last = st.dp_prev[:n]

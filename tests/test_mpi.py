@@ -337,6 +337,29 @@ def test_restart_reads_only_this_ranks_share(tmp_path_factory, old):
 
 
 @pytest.mark.mpi(min_size=2)
+def test_a_restart_read_with_more_chunks_on_one_rank(tmp_path_factory):
+    """2001 rows read 1000 at a time: rank 0's share is one chunk, rank 1's two, so rank
+    0 takes part in the second exchange with no rows of its own (that empty slice once
+    failed its reshape: "unreadable checkpoint" on every rank)."""
+    from mpi4py import MPI
+
+    from psph.decomposition.slabs import slab_cuts
+    from psph.io.checkpoint import read_checkpoint, read_restart
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        _synthetic_checkpoint(out / "checkpoint.h5", 2001, False)
+    comm.Barrier()
+    _, cuts, mine, _ = read_restart(out / "checkpoint.h5", comm, 0, 0.05, chunk=1000)
+    _, whole = read_checkpoint(out / "checkpoint.h5")
+    c = whole["x"][:, 0]
+    assert cuts.tobytes() == slab_cuts(c, comm.Get_size(), 0.05).tobytes()
+    owned = (c >= cuts[comm.Get_rank()]) & (c < cuts[comm.Get_rank() + 1])
+    assert all(mine[k].tobytes() == whole[k][owned].tobytes() for k in mine)
+
+
+@pytest.mark.mpi(min_size=2)
 def test_a_restart_read_failing_on_one_rank_stops_every_rank(tmp_path_factory, monkeypatch):
     """A read error on rank 1 only (its share of the rows): every rank raises the same
     SceneError (exit 2) instead of waiting in the next collective."""

@@ -111,7 +111,8 @@ def test_restart_with_the_projection_continues_bitwise(tmp_path):
     assert summary["steps_this_run"] < summary["steps"]
     assert compare_runs(tmp_path / "full" / "particles.h5",
                         tmp_path / "again" / "particles.h5") is None
-    # a checkpoint written before `dp_prev` existed restarts with a first-order warm start
+    # a checkpoint written before `dp_prev` existed reads it as zeros (the next guess is
+    # then 2 (p^n - p^(n-1)), a guess only)
     import h5py
 
     from psph.io.checkpoint import read_checkpoint

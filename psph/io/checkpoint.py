@@ -268,7 +268,9 @@ def _pack_chunk(f: h5py.File, a: int, b: int, order: np.ndarray, send: np.ndarra
         for j, fld in enumerate(FIELDS):
             if fld.name in f["particles"]:
                 rows = f["particles"][fld.name][a:b]
-                send[:b - a, col[j]:col[j + 1]] = rows.reshape(b - a, -1)[order]
+                # (b - a, width): also for an empty slice, where reshape(0, -1) fails
+                send[:b - a, col[j]:col[j + 1]] = rows.reshape(
+                    b - a, col[j + 1] - col[j])[order]
     except (OSError, KeyError, ValueError) as e:
         raise unreadable(e) from None
 

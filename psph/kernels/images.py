@@ -112,6 +112,9 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
     |x_a - x_b*| = |x_b - x_a*|). A row's own image adds 2 V_i w*_ii q_i, kept in
     `storage` (V_i storage_i q_i of the operator).
 
+    Planes exist for the free sides that drain with `drained_boundary = "mirror"` (a side
+    that stays a plane, `drainage.py`); an impervious or non-planar free surface has no
+    image here, and its correction keeps the mismatch below.
     The Darcy part (k_scale) is imaged once the plane's side has drained (planes[q, 3]).
     The velocity-correction part (rho_scale = dt) is imaged from the start: the
     correction takes the pair-symmetric gradient of Eq. (26), whose self term

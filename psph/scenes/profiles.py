@@ -92,14 +92,13 @@ def inside_layer(points: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.
 
 
 def check_water_table(table: float | list | str, lo, hi) -> None:
-    """`initial.water_table` as a level or a profile (`read_profile`) lies in the domain
-    [lo, hi]: a level within its height; a profile sharing its x range, with its
-    elevation within the height wherever it is over the domain (at its points there and
-    at the domain's sides)."""
+    """`initial.water_table` as a level or a profile (`read_profile`) over the domain
+    [lo, hi]: a profile shares its x range, and neither dips below the domain's floor
+    wherever it is over the domain (at the profile's points there and at the domain's
+    sides). Above the top is allowed: ponded or submerged ground."""
     if isinstance(table, (int, float)):
-        if not lo[1] <= table <= hi[1]:
-            raise ProfileError("level", table, f"outside the domain's height [{lo[1]:g}, "
-                                               f"{hi[1]:g}] m")
+        if table < lo[1]:
+            raise ProfileError("level", table, f"below the domain's floor y = {lo[1]:g} m")
         return
     points = read_profile(table)
     x0, x1 = max(points[0, 0], lo[0]), min(points[-1, 0], hi[0])
@@ -108,8 +107,8 @@ def check_water_table(table: float | list | str, lo, hi) -> None:
                            f"no x in the domain's [{lo[0]:g}, {hi[0]:g}] m")
     xs = np.concatenate([[x0, x1], points[(points[:, 0] > x0) & (points[:, 0] < x1), 0]])
     z = np.interp(xs, points[:, 0], points[:, 1])
-    out = np.flatnonzero((z < lo[1]) | (z > hi[1]))
+    out = np.flatnonzero(z < lo[1])
     if len(out):
         i = int(out[0])
         raise ProfileError(f"at x = {xs[i]:g}", float(z[i]),
-                           f"outside the domain's height [{lo[1]:g}, {hi[1]:g}] m")
+                           f"below the domain's floor y = {lo[1]:g} m")
