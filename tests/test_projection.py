@@ -121,6 +121,9 @@ def test_restart_with_the_projection_continues_bitwise(tmp_path):
         del f["particles"]["dp_prev"]
     _, arrays = read_checkpoint(tmp_path / "full" / "checkpoint.h5")
     assert np.all(arrays["dp_prev"] == 0.0) and len(arrays["dp_prev"]) == len(arrays["p"])
+    summary = run(scene, tmp_path / "full", quiet=True,
+                  restart=tmp_path / "full" / "checkpoint.h5")  # the distributed read too
+    assert summary["status"] == "finished" and summary["pressure_solve"]["steps_not_converged"] == 0
 
 
 def test_twice_and_four_times_the_solid_limit_have_no_period_two_mode(tmp_path):
