@@ -354,20 +354,10 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, prob
 
         cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
         verification = history_errors(scene, cols, {k: pos for k, (_, pos) in probes.items()})
-    if rank0 and scene.verification.reference == "collapse" and status == "finished":
-        from psph.io.snapshots import read_snapshots
-        from psph.verify.collapse import collapse_metrics, slide_history
+    if scene.verification.reference == "collapse" and status == "finished":
+        from psph.verify import collapse_verification
 
-        snaps = read_snapshots(out / "particles.h5")
-        last = snaps[-1]
-        verification = {"collapse": collapse_metrics(last["x"], last["x"] - last["u"],
-                                                     scene.particles.dx),
-                        "time_s": last["time"]}
-        verification["collapse"].update(slide_history(snaps, scene.particles.dx))
-        if scene.pressure.scheme != "none":
-            from psph.verify.pressure import pressure_quality
-
-            verification["pressure_quality"] = pressure_quality(snaps, scene)
+        verification = collapse_verification(out / "particles.h5", scene, slabs.comm)
         if history:
             verification["p_max_Pa"] = max(r["p_max"] for r in history)
             verification["p_min_Pa"] = min(r["p_min"] for r in history)

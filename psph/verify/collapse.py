@@ -2,10 +2,14 @@
 run-out distance, final height and back-scarp position."""
 
 import numpy as np
+from mpi4py import MPI
+
+from psph.verify.distributed import percentiles
 
 
-def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float) -> dict:
-    """x, x0: (N, 2) current and initial positions of all particles.
+def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float, comm=None) -> dict:
+    """x, x0: (N, 2) current and initial positions of the particles (this rank's share
+    of them; collective over `comm`, default one process).
 
     - runout_m: how far the toe advanced: the 99.8th percentile of x (a few splashed
       particles do not count) minus the initial largest x;
@@ -14,20 +18,31 @@ def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float) -> dict:
       end of the mass;
     - back_scarp_m: the smallest x where the free surface lies below 95 % of the initial
       height (the crest of the failure), measured in columns of width 2 dx.
+
+    The same numbers on any number of ranks (order statistics, extremes and a maximum
+    per column reduced over the ranks; psph/verify/distributed.py).
     """
-    toe = float(np.percentile(x[:, 0], 99.8))
-    left = x0[:, 0].min()
-    h0 = float(x0[:, 1].max() + 0.5 * dx)
+    comm = MPI.COMM_SELF if comm is None else comm
+    toe = percentiles(x[:, 0], [99.8], comm)[0]
+    left = -_max(-x0[:, 0], comm)
+    h0 = _max(x0[:, 1], comm) + 0.5 * dx
     near = x[:, 0] < left + 5 * dx
-    height = float(x[near, 1].max() + 0.5 * dx) if near.any() else 0.0
+    height = _max(x[near, 1], comm)
+    height = height + 0.5 * dx if np.isfinite(height) else 0.0
     col = np.floor((x[:, 0] - left) / (2 * dx)).astype(int)
     col = np.clip(col, 0, None)
-    top = np.full(col.max() + 1, -np.inf)
+    top = np.full(int(_max(col, comm)) + 1, -np.inf)
     np.maximum.at(top, col, x[:, 1] + 0.5 * dx)
+    comm.Allreduce(MPI.IN_PLACE, top, op=MPI.MAX)
     low = np.flatnonzero(top < 0.95 * h0)
-    scarp = float(left + 2 * dx * low[0]) if len(low) else float(x[:, 0].max())
-    return {"runout_m": toe - float(x0[:, 0].max()), "toe_m": toe,
+    scarp = float(left + 2 * dx * low[0]) if len(low) else _max(x[:, 0], comm)
+    return {"runout_m": toe - _max(x0[:, 0], comm), "toe_m": toe,
             "initial_height_m": h0, "final_height_m": height, "back_scarp_m": scarp}
+
+
+def _max(a: np.ndarray, comm) -> float:
+    """The largest of all ranks' values (-inf if none)."""
+    return comm.allreduce(float(a.max()) if len(a) else -np.inf, op=MPI.MAX)
 
 
 def successive_slides(times: np.ndarray, scarps: np.ndarray, h0: float,
@@ -71,8 +86,13 @@ def slide_history(snaps: list[dict], dx: float) -> dict:
     scarps = np.array([collapse_metrics(s["x"], s["x"] - s["u"], dx)["back_scarp_m"]
                        for s in snaps])
     h0 = collapse_metrics(snaps[0]["x"], snaps[0]["x"] - snaps[0]["u"], dx)["initial_height_m"]
-    out = successive_slides(times, scarps, h0, 5 * dx)
+    return slides_from(times, scarps, h0, dx)
+
+
+def slides_from(times: np.ndarray, scarps: np.ndarray, h0: float, dx: float) -> dict:
+    """`slide_history`'s block from the back-scarp series (s, m) and the initial height."""
+    out = successive_slides(np.asarray(times), np.asarray(scarps), h0, 5 * dx)
     out.pop("initial_height_m")
-    out["back_scarp_history_m"] = scarps.tolist()
-    out["snapshot_times_s"] = times.tolist()
+    out["back_scarp_history_m"] = np.asarray(scarps).tolist()
+    out["snapshot_times_s"] = np.asarray(times).tolist()
     return out

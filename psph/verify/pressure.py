@@ -19,8 +19,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from mpi4py import MPI
 
 from psph.physics.initial import table_elevation
+from psph.verify.distributed import extreme, percentiles, with_halo
 
 ALPHA_2D = 15.0 / (7.0 * math.pi)  # normalisation of Eq. (21) in 2D, times 1/h^2
 DEBRIS_DX = 5.0  # a particle that moved more than this many dx is "debris"
@@ -29,7 +31,7 @@ SURFACE_BIN = 0.25  # bin width of the ground-surface search, in dx
 SURFACE_REACH = 3  # bins either side of a particle's own bin (a window about 2 dx wide)
 
 
-def ground_surface(x: np.ndarray, dx: float) -> np.ndarray:
+def ground_surface(x: np.ndarray, dx: float, comm=None) -> np.ndarray:
     """Elevation (m) of the highest particle centre above each particle.
 
     The search window is the particle's own bin of width dx/4 and 3 bins on either side,
@@ -37,15 +39,22 @@ def ground_surface(x: np.ndarray, dx: float) -> np.ndarray:
     half a spacing left of the leftmost particle, so on the initial lattice a particle's
     window holds its own lattice column only, as in psph/physics/initial.py). A particle
     splashed above the mass lifts the surface of the particles below it.
+    `x` may be this rank's share of the particles (collective over `comm`: the bins'
+    maxima are reduced over the ranks).
     """
-    x = np.asarray(x, dtype=float)
-    if len(x) == 0:
-        return np.zeros(0)
+    comm = MPI.COMM_SELF if comm is None else comm
+    x = np.asarray(x, dtype=float).reshape(-1, 2)
     b = SURFACE_BIN * dx
-    k = np.floor((x[:, 0] - (x[:, 0].min() - 0.5 * dx)) / b).astype(np.int64)
+    x_min = -comm.allreduce(-float(x[:, 0].min()) if len(x) else -np.inf, op=MPI.MAX)
+    k = np.floor((x[:, 0] - (x_min - 0.5 * dx)) / b).astype(np.int64)
+    k_max = comm.allreduce(int(k.max()) if len(k) else -1, op=MPI.MAX)
+    if k_max < 0:
+        return np.zeros(0)
     m = SURFACE_REACH
-    top = np.full(k.max() + 1 + 2 * m, -np.inf)
+    top = np.full(k_max + 1 + 2 * m, -np.inf)
     np.maximum.at(top, k + m, x[:, 1])
+    if comm.Get_size() > 1:
+        comm.Allreduce(MPI.IN_PLACE, top, op=MPI.MAX)
     windowed = top.copy()
     for s in range(1, m + 1):  # sliding maximum over 2m + 1 bins
         windowed[m:-m] = np.maximum(windowed[m:-m], np.maximum(top[m - s:len(top) - m - s],
@@ -53,8 +62,8 @@ def ground_surface(x: np.ndarray, dx: float) -> np.ndarray:
     return windowed[k + m]
 
 
-def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | None = None
-                         ) -> np.ndarray:
+def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | None = None,
+                         comm=None) -> np.ndarray:
     """Hydrostatic pore pressure (Pa) of the water table at each particle's current
     position x (N, 2): gamma_l max(0, y_w - y), gamma_l = rho_l |g| (the initial state,
     `initial.water_table`, Sections 4.4-4.5).
@@ -76,24 +85,25 @@ def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | N
     - None: zero.
 
     `surface_y`: the ground-surface elevation per particle (N,) or one value, if known;
-    by default `ground_surface(x, dx)`.
+    by default `ground_surface(x, dx, comm)` (collective; `x` this rank's share).
     """
-    x = np.asarray(x, dtype=float)
+    x = np.asarray(x, dtype=float).reshape(-1, 2)
     table = scene.initial.water_table
-    if table is None or len(x) == 0:
+    if table is None:
         return np.zeros(len(x))
     gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
-    surface = ground_surface(x, scene.particles.dx) if surface_y is None \
+    surface = ground_surface(x, scene.particles.dx, comm) if surface_y is None \
         else np.broadcast_to(np.asarray(surface_y, dtype=float), (len(x),))
     y_w = surface if table == "surface" else np.minimum(table_elevation(table, x[:, 0]),
                                                         surface)
     return gamma * np.maximum(y_w - x[:, 1], 0.0)
 
 
-def excess_pressure(snap: dict, scene) -> np.ndarray:
+def excess_pressure(snap: dict, scene, comm=None) -> np.ndarray:
     """Excess pore pressure p - `hydrostatic_pressure` (Pa) of one snapshot (a dict of
-    `psph.io.snapshots.read_snapshots`: x, u, p, stress, id, ...)."""
-    return snap["p"] - hydrostatic_pressure(snap["x"], scene)
+    `psph.io.snapshots.read_snapshots`: x, u, p, stress, id, ...; or this rank's share of
+    its rows, collective over `comm`)."""
+    return snap["p"] - hydrostatic_pressure(snap["x"], scene, comm=comm)
 
 
 def mean_effective_stress(stress: np.ndarray) -> np.ndarray:
@@ -146,7 +156,8 @@ def neighbour_pairs(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarra
 
 
 def checkerboard_index(x: np.ndarray, f: np.ndarray, h: float, mask: np.ndarray | None = None,
-                       pairs: tuple | None = None) -> float:
+                       pairs: tuple | None = None, comm=None, n_owned: int | None = None
+                       ) -> float:
     """Particle-scale (odd-even) noise of a field f at positions x (N, 2).
 
     index = rms_i (f_i - fbar_i) / rms_i (f_i - mean f), over the particles i of `mask`
@@ -159,22 +170,34 @@ def checkerboard_index(x: np.ndarray, f: np.ndarray, h: float, mask: np.ndarray 
     square lattice gives 1.45 (fbar_i = -0.45 f_i at h = 1.2 dx). By convention 0 when
     f is constant over the mask (rms = 0). `pairs`: `neighbour_pairs(x, 2h)`, if known.
     Returns NaN when the mask selects no particle with neighbours.
+
+    Over ranks (`comm`): rows 0..n_owned-1 are this rank's particles i, the rest copies of
+    other ranks' particles within 2h (`with_halo`), neighbours only; the rms and the mean
+    are sums reduced over the ranks.
     """
+    comm = MPI.COMM_SELF if comm is None else comm
     f = np.asarray(f, dtype=float)
     n = len(f)
+    n_owned = n if n_owned is None else n_owned
     sel = np.ones(n, bool) if mask is None else np.asarray(mask, bool)
     i, j, r = neighbour_pairs(x, 2.0 * h) if pairs is None else pairs
+    keep = i < n_owned
+    i, j, r = i[keep], j[keep], r[keep]
     w = cubic_spline(r, h)
-    den = np.bincount(i, weights=w, minlength=n)
-    num = np.bincount(i, weights=w * f[j], minlength=n)
-    use = sel & (den > 0) & np.isfinite(f)
-    if not use.any():
+    den = np.bincount(i, weights=w, minlength=n)[:n_owned]
+    num = np.bincount(i, weights=w * f[j], minlength=n)[:n_owned]
+    f = f[:n_owned]
+    use = sel[:n_owned] & (den > 0) & np.isfinite(f)
+    count = comm.allreduce(int(use.sum()))
+    if count == 0:
         return math.nan
     fbar = num[use] / den[use]
-    spread = math.sqrt(float(np.mean((f[use] - f[use].mean()) ** 2)))
-    if spread == 0.0 or spread < 1e-12 * float(np.max(np.abs(f[use]))):
+    mean = comm.allreduce(float(f[use].sum())) / count
+    spread = math.sqrt(comm.allreduce(float(np.sum((f[use] - mean) ** 2))) / count)
+    f_max = comm.allreduce(float(np.max(np.abs(f[use]))) if use.any() else 0.0, op=MPI.MAX)
+    if spread == 0.0 or spread < 1e-12 * f_max:
         return 0.0
-    return math.sqrt(float(np.mean((f[use] - fbar) ** 2))) / spread
+    return math.sqrt(comm.allreduce(float(np.sum((f[use] - fbar) ** 2))) / count) / spread
 
 
 def _num(v: float) -> float | None:
@@ -182,31 +205,38 @@ def _num(v: float) -> float | None:
     return None if v is None or not math.isfinite(v) else float(v)
 
 
-def snapshot_quality(snap: dict, scene) -> dict:
+def snapshot_quality(snap: dict, scene, comm=None) -> dict:
     """Pressure quality of one snapshot: percentiles and extremes of the excess pressure
     (with the particle's id and position), and the checkerboard index of p and p' over all
-    particles and over the debris (moved more than 5 dx from x - u, the initial place)."""
+    particles and over the debris (moved more than 5 dx from x - u, the initial place).
+    `snap` may hold this rank's share of the rows (collective over `comm`; the same
+    numbers on any number of ranks but for the rounding of the checkerboard's sums)."""
+    comm = MPI.COMM_SELF if comm is None else comm
     x = snap["x"]
     ids = snap["id"] if "id" in snap else np.arange(len(x))
-    ex = excess_pressure(snap, scene)
-    pct = np.percentile(ex, PERCENTILES)
-    lo, hi = int(np.argmin(ex)), int(np.argmax(ex))
+    ex = excess_pressure(snap, scene, comm)
+    pct = percentiles(ex, PERCENTILES, comm)
+    ex_min, id_min, x_min = extreme(ex, ids, x, comm, largest=False)
+    ex_max, id_max, x_max = extreme(ex, ids, x, comm, largest=True)
     debris = np.linalg.norm(snap["u"], axis=1) > DEBRIS_DX * scene.particles.dx
-    pairs = neighbour_pairs(x, 2.0 * scene.h)
-    p_eff = mean_effective_stress(snap["stress"])
+    n_debris = comm.allreduce(int(debris.sum()))
     out = {"time_s": float(snap["time"])}
     for q, v in zip(PERCENTILES, pct, strict=True):
         out[f"excess_p{q}_Pa"] = float(v)
-    out["abs_excess_p99_Pa"] = float(np.percentile(np.abs(ex), 99))
-    out.update({"excess_min_Pa": float(ex[lo]), "excess_min_id": int(ids[lo]),
-                "excess_min_x_m": [float(v) for v in x[lo]],
-                "excess_max_Pa": float(ex[hi]), "excess_max_id": int(ids[hi]),
-                "excess_max_x_m": [float(v) for v in x[hi]],
-                "debris_particles": int(debris.sum())})
-    for name, f in (("p", snap["p"]), ("p_eff", p_eff)):
-        out[f"checkerboard_{name}_all"] = _num(checkerboard_index(x, f, scene.h, None, pairs))
-        out[f"checkerboard_{name}_debris"] = _num(
-            checkerboard_index(x, f, scene.h, debris, pairs)) if debris.any() else None
+    out["abs_excess_p99_Pa"] = percentiles(np.abs(ex), [99], comm)[0]
+    out.update({"excess_min_Pa": ex_min, "excess_min_id": id_min, "excess_min_x_m": x_min,
+                "excess_max_Pa": ex_max, "excess_max_id": id_max, "excess_max_x_m": x_max,
+                "debris_particles": n_debris})
+    xs, fs, n_owned = with_halo(x, {"p": snap["p"],
+                                    "p_eff": mean_effective_stress(snap["stress"]),
+                                    "debris": debris.astype(float)}, 2.0 * scene.h, comm)
+    pairs = neighbour_pairs(xs, 2.0 * scene.h)
+    debris = fs["debris"] > 0.5
+    for name in ("p", "p_eff"):
+        out[f"checkerboard_{name}_all"] = _num(checkerboard_index(
+            xs, fs[name], scene.h, None, pairs, comm, n_owned))
+        out[f"checkerboard_{name}_debris"] = _num(checkerboard_index(
+            xs, fs[name], scene.h, debris, pairs, comm, n_owned)) if n_debris else None
     return out
 
 
@@ -215,7 +245,11 @@ def pressure_quality(snaps: list[dict], scene) -> dict:
     (`read_snapshots`): `series` holds each quantity of `snapshot_quality` as a list over
     the snapshot times, `over_run` the extremes over all snapshots and the last snapshot's
     checkerboard indices. JSON-serialisable (floats, ints, lists; None for undefined)."""
-    rows = [snapshot_quality(s, scene) for s in snaps]
+    return pressure_quality_from([snapshot_quality(s, scene) for s in snaps], scene)
+
+
+def pressure_quality_from(rows: list[dict], scene) -> dict:
+    """`pressure_quality`'s block from the rows of `snapshot_quality`, one a snapshot."""
     series = {k: [r[k] for r in rows] for k in rows[0]} if rows else {}
     over = {}
     if rows:
