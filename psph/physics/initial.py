@@ -182,10 +182,13 @@ def overburden(rho: np.ndarray, y: np.ndarray, column: np.ndarray, n_columns: in
     (rho_j - rho_i) dx, so that rho_i d_i + this = the integral of rho over the column
     from its top to particle i's centre (each particle above over its dx, i's own over
     dx / 2; a gap in the column counts with rho_i, as the single-density formula does).
-    Exactly 0 in a column of one density. Particles of a column on other ranks (slabs cut
-    along y, in rank order upward) come through the reducer's sum and exclusive scan.
-    Each column's sum runs from its top down on its own (a padded 2D cumulative sum), so
-    a rank's other columns do not change its bits."""
+    Exactly 0 in a column of one density.
+
+    Each column's running sum goes from its top down, particle by particle (a padded 2D
+    cumulative sum), the same additions in the same order on any number of ranks: with
+    slabs cut along x a column lies on one rank; with slabs cut along y (in rank order
+    upward) each rank continues the running sums the ranks above it hand down, one
+    reduction a rank (set-up only)."""
     ref = np.full(n_columns, -np.inf)
     np.maximum.at(ref, column, rho)
     ref = reducer.max(ref)  # one reference density a column, so equal rho give d = 0
@@ -195,16 +198,23 @@ def overburden(rho: np.ndarray, y: np.ndarray, column: np.ndarray, n_columns: in
     first = np.concatenate(([0], np.cumsum(counts)[:-1]))
     pos = np.arange(len(order)) - first[slot]  # particles above, on this rank
     grid = np.zeros((len(cols), (counts.max() if len(counts) else 0) + 1))
-    grid[slot, pos + 1] = d[order]
-    np.cumsum(grid, axis=1, out=grid)
+    running = np.zeros(2 * n_columns)  # sum of d and count above this rank, per column
+    count_above = np.zeros(len(cols))
+    for r in range(reducer.size - 1, -1, -1):
+        if r == reducer.rank:
+            grid[:, 0] = running[cols]
+            count_above = running[n_columns + cols]
+            grid[slot, pos + 1] = d[order]
+            np.cumsum(grid, axis=1, out=grid)
+            mine = running.copy()
+            mine[cols] = grid[np.arange(len(cols)), counts]
+            mine[n_columns + cols] += counts
+        else:
+            mine = np.zeros(2 * n_columns)
+        if reducer.size > 1:
+            running = reducer.sum(mine) if r > 0 else running
     above = np.empty_like(d)
-    above[order] = grid[slot, pos]  # sum of d over the particles above, this rank
+    above[order] = grid[slot, pos]  # sum of d over the particles above
     count = np.empty_like(d)
-    count[order] = pos
-    both = np.zeros(2 * n_columns)
-    np.add.at(both, column, d)
-    np.add.at(both, n_columns + column, 1.0)
-    higher = reducer.sum(both) - reducer.exclusive_scan(both) - both  # on upper ranks
-    above += higher[:n_columns][column]
-    count += higher[n_columns:][column]
+    count[order] = pos + count_above[slot]
     return (above - count * d) * dx
