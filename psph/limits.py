@@ -13,17 +13,22 @@ if TYPE_CHECKING:
 
 
 def solid_dt_limit(scene: Scene) -> float:
-    """Delta t_s of Eq. (41): C_s h / c_sp with c_sp = sqrt(E / rho_s)."""
-    m = scene.material
-    return scene.time.cfl_solid * scene.h / math.sqrt(m.E / m.rho_s)
+    """Delta t_s of Eq. (41): C_s h / c_sp with c_sp = sqrt(E / rho_s), of the material
+    with the fastest c_sp (the most restrictive) when there are several."""
+    return min(scene.time.cfl_solid * scene.h / math.sqrt(m.E / m.rho_s)
+               for m in scene.material_list)
 
 
 def undrained_dt_limit(scene: Scene) -> float:
     """Eq. (41) with the undrained P-wave speed of the explicit coupled update,
     c_u = sqrt((lambda + 2 G + K_l / n) / rho): with explicit Eq. (25) the pore water
     adds the stiffness K_l / n to the solid's (measured: the sensitive clay slope of
-    Section 4.5, K_l / n = 20 E, blows up at 2.5e-4 s and runs at 1e-4 s)."""
-    m = scene.material
+    Section 4.5, K_l / n = 20 E, blows up at 2.5e-4 s and runs at 1e-4 s). Several
+    materials: the most restrictive."""
+    return min(_undrained_dt(scene, m) for m in scene.material_list)
+
+
+def _undrained_dt(scene: Scene, m) -> float:
     lam = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu))
     shear = m.E / (2 * (1 + m.nu))
     rho = (1 - m.porosity) * m.rho_s + m.porosity * m.rho_l
@@ -53,10 +58,10 @@ def tpi_gain(scene: Scene, dt: float) -> float:
     """G = dt gamma_l / (rho k): Eq. (38) has no storage, so p answers div v at once with
     the gain gamma_l / sum_j A_ij (~ h^2 / k) and grad p feeds back into v, an explicit
     bulk viscosity whose step limit is rho k / gamma_l, independent of h (README,
-    "Stability of TPI under gravity"). rho: the mixture density; k: the initial one."""
-    m = scene.material
-    rho = (1 - m.porosity) * m.rho_s + m.porosity * m.rho_l
-    return dt * m.rho_l * m.g_ref / (rho * m.k)
+    "Stability of TPI under gravity"). rho: the mixture density; k: the initial one;
+    several materials: the largest G (the most restrictive)."""
+    return max(dt * m.rho_l * m.g_ref / (((1 - m.porosity) * m.rho_s + m.porosity * m.rho_l)
+                                         * m.k) for m in scene.material_list)
 
 
 def tpi_gain_limit(alpha: float, gravity: bool = True) -> float:
@@ -70,7 +75,7 @@ def tpi_gain_limit(alpha: float, gravity: bool = True) -> float:
 
 
 def fluid_dt_limit(scene: Scene) -> float:
-    """Delta t_l of Eq. (42): C_l n gamma_l h^2 / (K_l k)."""
-    m = scene.material
-    gamma = m.rho_l * m.g_ref
-    return scene.time.cfl_fluid * m.porosity * gamma * scene.h**2 / (m.K_l * m.k)
+    """Delta t_l of Eq. (42): C_l n gamma_l h^2 / (K_l k); several materials: the most
+    restrictive."""
+    return min(scene.time.cfl_fluid * m.porosity * (m.rho_l * m.g_ref) * scene.h**2
+               / (m.K_l * m.k) for m in scene.material_list)

@@ -44,11 +44,13 @@ FIELDS: tuple[Field, ...] = (
     Field("surface", 1, "1", "1 on the loaded surface layer (settlement diagnostics)", False),
     Field("load_index", 1, "1", "index of the surface load acting on the particle, or -1", False),
     Field("traction", 2, "m", "outward tributary area vector -n dA of a loaded particle", False),
+    Field("material", 1, "1", "index of the particle's material in the scene's list "
+          "(0: the one [material], or the first of [[materials]]; issue 16)", False),
 )
 
 FIELD_BY_NAME = {f.name: f for f in FIELDS}
 # fields added after checkpoint format 1 was fixed: zero when an older checkpoint lacks them
-ADDED_FIELDS = ("dp_prev",)
+ADDED_FIELDS = ("dp_prev", "material")
 NEIGHBOUR_FIELDS = tuple(f.name for f in FIELDS if f.neighbour)
 
 

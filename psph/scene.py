@@ -10,7 +10,14 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    model_serializer,
+    model_validator,
+)
 
 from psph.errors import SceneError
 from psph.limits import (  # noqa: F401  (re-exported: psph.scene.solid_dt_limit etc.)
@@ -22,6 +29,13 @@ from psph.limits import (  # noqa: F401  (re-exported: psph.scene.solid_dt_limit
     tpi_gain_dt_limit,
     tpi_gain_limit,
     undrained_dt_limit,
+)
+from psph.scene_material import (  # noqa: F401  (re-exported)
+    Material,
+    NamedMaterial,
+    Plasticity,
+    _Rule,
+    check_materials,
 )
 
 Pos = Annotated[float, Field(gt=0)]
@@ -46,6 +60,7 @@ class Block(_Model):
 
     min: Vec2
     max: Vec2
+    material: str | None = None  # a [[materials]] name; default: the first material
 
 
 class Polygon(_Model):
@@ -53,6 +68,7 @@ class Polygon(_Model):
     domain.min) inside it is filled with particles."""
 
     vertices: Annotated[list[Vec2], Field(min_length=3)]
+    material: str | None = None
 
 
 class MeshGeometry(_Model):
@@ -60,6 +76,7 @@ class MeshGeometry(_Model):
     triangles and quads (2D, x-y plane)."""
 
     file: str
+    material: str | None = None
 
 
 class Layer(_Model):
@@ -69,6 +86,7 @@ class Layer(_Model):
 
     top: list[Vec2] | str
     bottom: list[Vec2] | str
+    material: str | None = None
 
 
 class Particles(_Model):
@@ -78,39 +96,6 @@ class Particles(_Model):
     polygons: list[Polygon] = []
     meshes: list[MeshGeometry] = []
     layers: list[Layer] = []
-
-
-class Plasticity(_Model):
-    """Drucker-Prager strain softening, Eq. (14)-(19). Angles in degrees, cohesion in Pa;
-    residual values default to the peak ones (no softening)."""
-
-    phi: Annotated[float, Field(ge=0.0, lt=90.0)]  # peak friction angle phi_p
-    phi_r: Annotated[float, Field(ge=0.0, lt=90.0)] | None = None  # residual, Eq. (17)
-    c: Annotated[float, Field(ge=0.0)] = 0.0  # peak cohesion c_p
-    c_r: Annotated[float, Field(ge=0.0)] | None = None  # residual, Eq. (18)
-    psi: Annotated[float, Field(gt=-90.0, lt=90.0)] = 0.0  # initial dilation psi_0, Eq. (19)
-    eta: Annotated[float, Field(ge=0.0)] = 0.0  # softening rate of phi and c, Eq. (17)-(18)
-    s_f: Annotated[float, Field(ge=0.0)] = 0.0  # decay rate of dilation, Eq. (19)
-
-
-class Material(_Model):
-    """Saturated soil, linear elastic or elastic-plastic (Section 2.2; units Pa, kg/m^3,
-    m/s)."""
-
-    model: Literal["elastic", "drucker_prager"] = "elastic"
-    plasticity: Plasticity | None = None  # required for model = "drucker_prager"
-    E: Pos
-    nu: Annotated[float, Field(gt=-1.0, lt=0.5)]
-    porosity: Annotated[float, Field(gt=0.0, lt=1.0)]
-    rho_s: Pos
-    rho_l: Pos = 1000.0
-    K_l: Pos = 1.0e9
-    k: Pos
-    g_ref: Pos = 9.81  # converts hydraulic conductivity k: gamma_l = rho_l g_ref
-    # Kozeny-Carman coefficient of Eq. (4), k = k exp((e - e0) / C_k); 0: constant k
-    C_k: Annotated[float, Field(ge=0.0)] = 0.0
-    # floor of the porosity of Eq. (24) (the densest state of the soil); 0: none
-    porosity_min: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.0
 
 
 class Boundary(_Model):
@@ -281,7 +266,11 @@ class Scene(_Model):
     gravity: Vec2 = [0.0, 0.0]
     domain: Domain
     particles: Particles
-    material: Material
+    # one material (index 0), or several by name (issue 16, psph/scene_material.py); with
+    # [[materials]], `material` is set to the first of them after validation (the fluid's
+    # constants and the references read it) and left out of the dump
+    material: Material | None = None
+    materials: list[NamedMaterial] = []
     boundaries: Boundaries = Boundaries()
     loads: list[Load] = []
     pressure: Pressure = Pressure()
@@ -331,16 +320,9 @@ class Scene(_Model):
                 if b.max[d] > hi[d] + 1e-12:
                     raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
                                 f"particles outside the walls (domain.max[{d}] = {hi[d]})")
-        m = self.material
-        if not m.porosity_min < m.porosity:
-            raise _Rule("material.porosity", m.porosity,
-                        f"must be above material.porosity_min = {m.porosity_min}")
-        if self.material.model == "drucker_prager" and self.material.plasticity is None:
-            raise _Rule("material.plasticity", None,
-                        "required for material.model = 'drucker_prager' (at least phi)")
-        if self.material.model == "elastic" and self.material.plasticity is not None:
-            raise _Rule("material.model", "elastic",
-                        "material.plasticity is given: set model = 'drucker_prager'")
+        mats = check_materials(self)
+        if self.material is None:
+            self.material = mats[0]
         table = self.initial.water_table
         if table is not None and table != "surface":
             from psph.scenes.profiles import ProfileError, check_water_table
@@ -401,6 +383,8 @@ class Scene(_Model):
             raise _Rule(key, True, "needs gravity = [0, 0] and no initial.k0 or water_table")
         if self.pressure.scheme == "none":
             raise _Rule(key, True, "needs pore water (pressure.scheme is 'none')")
+        if len(self.materials) > 1:
+            raise _Rule(key, True, "needs a single material (the column's own modulus)")
 
     def _check_tpi_stability(self) -> None:
         """TPI needs somewhere to drain, and the measured bounds of Eq. (38)-(39): alpha <=
@@ -435,6 +419,20 @@ class Scene(_Model):
                         f"is above its stability bound {rule} = {limit:.3g} ({bench}): "
                         f"dt <= {dt * limit / gain:.3e} s; {force}")
 
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        """With [[materials]], `material` (their first) is not written back; without them,
+        no empty `materials` (the scene.toml of a one-material scene is as before)."""
+        d = handler(self)
+        if isinstance(d, dict):
+            d.pop("material" if self.materials else "materials", None)
+        return d
+
+    @property
+    def material_list(self) -> list[Material]:
+        """The materials in index order (the per-particle `material` field indexes it)."""
+        return list(self.materials) or [self.material]
+
     @property
     def h(self) -> float:
         return self.particles.h_factor * self.particles.dx
@@ -458,12 +456,6 @@ def check_layer_profiles(layer: Layer, key: str):
     except ProfileError as e:
         raise _Rule(f"{key}.bottom", e.value, e.rule) from None
     return points["top"], points["bottom"]
-
-
-class _Rule(ValueError):
-    def __init__(self, key: str, value, rule: str):
-        super().__init__(rule)
-        self.key, self.value, self.rule = key, value, rule
 
 
 # ---------------------------------------------------------------------------- loading
@@ -584,7 +576,7 @@ def resolve(scene: Scene) -> Scene:
     if scene.stabilisation.artificial_stress is None:
         scene = scene.model_copy(deep=True)
         scene.stabilisation.artificial_stress = \
-            0.5 if scene.material.model == "drucker_prager" else 0.0
+            0.5 if any(m.model == "drucker_prager" for m in scene.material_list) else 0.0
     if scene.time.end is None:
         from psph.verify import reference_times
 

@@ -49,7 +49,13 @@ from psph.kernels.update import (
 from psph.particles import ParticleStore
 from psph.physics.initial import initial_particles
 from psph.physics.loads import load_values
-from psph.physics.material import plasticity_parameters, soil_from_scene
+from psph.physics.material import (
+    fastest_undrained,
+    material_table,
+    plasticity_parameters,
+    soil_from_scene,
+    stiffest,
+)
 from psph.pressure_solve import PressureSolve
 from psph.scene import Scene
 from psph.scenes.geometry import inside_polygon
@@ -152,15 +158,19 @@ class Simulation:
         self.body = (float(g[0]), float(g[1]))
         self.head_b = self.soil.rho_l * np.array(self.body) if scene.pressure.scheme != "none" \
             else np.zeros(2)
-        self.damping = self.soil.damping_coefficient(scene.stabilisation.damping, self.h)
+        # several materials (issue 16): a row per material, indexed by the particle's
+        # `material`; damping and the viscosity's sound speed from the stiffest one
+        self.mat = material_table(scene)
+        self.stiff = stiffest(scene)
+        self.damping = self.stiff.damping_coefficient(scene.stabilisation.damping, self.h)
         self.coupled = scene.pressure.scheme != "none"
         # weight of p in the pair stress of Eq. (26): 1 "pair", 0.5 "closure", 0 the others
         self.p_weight = {"pair": 1.0, "closure": 0.5}.get(scene.pressure.momentum, 0.0) \
             if self.coupled else 1.0
-        self.av_sound_speed = (self.soil.undrained_sound_speed
+        self.av_sound_speed = (fastest_undrained(scene)
                                if self.coupled and scene.stabilisation.av_sound_speed
-                               == "undrained" else self.soil.sound_speed)
-        self.plastic = scene.material.model == "drucker_prager"
+                               == "undrained" else self.stiff.sound_speed)
+        self.plastic = any(m.model == "drucker_prager" for m in scene.material_list)
         self.dp = plasticity_parameters(scene)
         self.acc_term = self.coupled and scene.pressure.acceleration_term
         self.symplectic = scene.time.integrator == "symplectic"
@@ -305,8 +315,7 @@ class Simulation:
         if stab.pressure_filter_porosity:
             porosity_follows_pressure_filter(
                 st.n_owned, p_before, st.p, st.poro, st.poro0, st.vol, st.vol0, st.rho,
-                st.perm, s.rho_s, s.rho_l, self.scene.material.k, self.scene.material.C_k,
-                s.K_l)
+                st.perm, s.rho_l, self.mat, st.material, s.K_l)
         if stab.shepard_stress:
             stress_filter = mls_stress if stab.stress_filter == "mls" else shepard_stress
             if stab.stress_filter_porosity:
@@ -317,8 +326,7 @@ class Simulation:
             if stab.stress_filter_porosity:
                 porosity_follows_stress_filter(
                     st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
-                    st.perm, s.rho_s, s.rho_l, self.scene.material.k,
-                    self.scene.material.C_k, 3.0 * s.lam + 2.0 * s.shear)
+                    st.perm, s.rho_l, self.mat, st.material)
         for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()
@@ -387,13 +395,11 @@ class Simulation:
                       st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
                       st.drained_from, self.drainage.layer_clock(self.t), st.load_index,
                       st.traction, self.load_value, self.dt,
-                      s.lam, s.shear, s.K_l, s.gamma_l, s.rho_l, s.rho_s, self.body[0],
+                      self.mat, st.material, s.K_l, s.gamma_l, s.rho_l, self.body[0],
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      self.dp, st.eps_p, self.ponding, self.scene.material.k,
-                      self.scene.material.C_k, self.symplectic,
-                      self.scene.material.porosity_min)
+                      st.eps_p, self.ponding, self.symplectic)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
@@ -500,7 +506,7 @@ class Simulation:
         dt_scheme = (self.dt, self.scheme)
         damping = self.damping
         self.dt, self.scheme = self.stepping.dt_main, SCHEME_NONE
-        self.damping = self.soil.damping_coefficient(ini.equilibrate_damping, self.h)
+        self.damping = self.stiff.damping_coefficient(ini.equilibrate_damping, self.h)
         stages = [s for s in self.stages if s.every == 1]
         wall0 = time.perf_counter()
         for _ in range(steps):

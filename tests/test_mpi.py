@@ -383,3 +383,122 @@ def test_a_restart_read_failing_on_one_rank_stops_every_rank(tmp_path_factory, m
     monkeypatch.setattr(ck, "_pack_chunk", failing)
     with pytest.raises(SceneError, match="unreadable checkpoint .Can't read data"):
         ck.read_restart(out / "checkpoint.h5", comm, 0, 0.05, chunk=500)
+
+
+TWO_MATERIALS = """
+name = "two_materials_falling"
+gravity = [0.0, -9.81]
+[domain]
+min = [0.0, 0.0]
+max = [0.2, 1.0]
+[particles]
+dx = 0.02
+[[particles.blocks]]
+min = [0.0, 0.1]
+max = [0.2, 0.4]
+[[particles.polygons]]
+vertices = [[0.0, 0.4], [0.2, 0.4], [0.2, 0.7], [0.0, 0.7]]
+material = "weak"
+[[materials]]
+name = "soft"
+E = 1.0e6
+nu = 0.3
+porosity = 0.4
+rho_s = 2000.0
+k = 1.0e-3
+[[materials]]
+name = "weak"
+model = "drucker_prager"
+E = 3.0e6
+nu = 0.25
+porosity = 0.3
+rho_s = 2400.0
+k = 1.0e-3
+plasticity = { phi = 20.0, c = 300.0 }
+[boundaries]
+left = { motion = "slip" }
+right = { motion = "slip" }
+bottom = { motion = "fixed" }
+[pressure]
+scheme = "none"
+[time]
+end = 0.2
+[output]
+interval = 0.05
+[checkpoint]
+every = 1500
+at_end = false
+"""
+
+
+@pytest.mark.mpi(min_size=2)
+def test_two_materials_migrate_checkpoint_and_restart_bitwise(tmp_path_factory):
+    """Issue 16: a block of two materials (the upper one Drucker-Prager) falls across the
+    slab cut: on 1 and 2 ranks, and restarted on 2 ranks from a mid-run checkpoint, every
+    snapshot field (with `material` and eps_p) is the same bits."""
+    import shutil
+
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        (out / "two_materials.toml").write_text(TWO_MATERIALS)
+    comm.Barrier()
+    scene = load_scene(str(out / "two_materials.toml"))
+    _one_vs_two(comm, scene, out)
+    if comm.Get_rank() == 0:
+        shutil.copytree(out / "two", out / "restarted")
+    comm.Barrier()
+    summary = run(scene, out / "restarted", comm=comm, quiet=True,
+                  restart=out / "restarted" / "checkpoint.h5")
+    problem = None
+    if comm.Get_rank() == 0:
+        one = read_snapshots(out / "one" / "particles.h5")
+        fields = ("x", "u", "v", "p", "n", "stress", "eps_p", "material")
+        for other in ("two", "restarted"):
+            snaps = read_snapshots(out / other / "particles.h5")
+            for a, b in zip(one, snaps, strict=True):
+                bad = [f for f in fields if a[f].tobytes() != b[f].tobytes()]
+                if bad or not np.array_equal(a["id"], b["id"]):
+                    problem = problem or f"{other} step {a['step']}: {bad}"
+        last = one[-1]
+        y0 = last["x"][:, 1] - last["u"][:, 1]
+        if not np.array_equal(last["material"], (y0 > 0.4) * 1):
+            problem = problem or "material index not that of the source"
+        if not (last["eps_p"][y0 > 0.4].max() > 0 and last["eps_p"][y0 < 0.4].max() == 0):
+            problem = problem or "eps_p: only the Drucker-Prager block may yield"
+        if not np.sum((y0 > 0.4) & (last["x"][:, 1] < 0.4)) >= 10:
+            problem = problem or "no particle crossed the cut"
+    problem = comm.bcast(problem, root=0)
+    assert problem is None, problem
+    assert summary["restarted_from"] is not None and 0 < summary["steps_this_run"]
+
+
+@pytest.mark.mpi(min_size=2)
+@pytest.mark.parametrize("axis", ["x", "y"])
+def test_layered_k0_set_up_one_vs_two_ranks_bitwise(tmp_path_factory, axis):
+    """The layered overburden (`physics.initial.overburden`) seeded on two slabs is the
+    one-process set-up bit for bit: along x a lattice column lies on one rank, along y
+    the running sums continue from the rank above."""
+    from mpi4py import MPI
+
+    from psph.physics.initial import initial_particles
+    from psph.run import make_slabs
+    from tests.test_materials import LAYERED
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        (out / "layered.toml").write_text(LAYERED)
+    comm.Barrier()
+    scene = load_scene(str(out / "layered.toml"), [f"decomposition.axis='{axis}'"])
+    slabs = make_slabs(scene, comm)
+    local = initial_particles(scene, slabs.reducer, slabs.slab)
+    whole = initial_particles(scene)
+    mine = slabs.owned_mask(whole["x"])
+    problems = [f"field {k} differs" for k in whole
+                if local[k].tobytes() != whole[k][mine].tobytes()]
+    problems = sum(comm.allgather(problems), [])
+    assert not problems, problems
+    assert slabs.axis == "xy".index(axis) and 0 < mine.sum() < len(mine)

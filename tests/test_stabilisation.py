@@ -12,6 +12,7 @@ from psph.kernels.update import (
     porosity_follows_stress_filter,
     tpi_pressure,
 )
+from psph.physics.material import material_row
 from tests.helpers import cell_lists, jittered_lattice
 
 
@@ -184,7 +185,8 @@ def _filter_with_porosity(x, stress, poro, bulk3, h):
     mls_stress(n, n, x, out, np.full(n, 1e-4), cell_start, order, ncell, h, np.zeros((n, 18)))
     vol = np.full(n, 1e-4)
     porosity_follows_stress_filter(n, trace, out, n_new, np.full(n, 0.4), vol, np.full(n, 1e-4),
-                                   np.zeros(n), np.zeros(n), 2650.0, 1000.0, 5e-8, 0.0, bulk3)
+                                   np.zeros(n), np.zeros(n), 1000.0,
+                                   material_row(rho_s=2650.0, k=5e-8, bulk3=bulk3), np.zeros(n))
     return out, n_new, vol
 
 
@@ -233,8 +235,8 @@ def test_pressure_filter_moves_the_porosity_with_the_strain_it_erases():
         shepard_pressure(n, n, x, p, p.copy(), vol.copy(), np.full(n, np.inf), 0.0,
                          cell_start, order, ncell, h, np.zeros((n, 2)))
         porosity_follows_pressure_filter(n, before, p, poro, np.full(n, n0), vol,
-                                         np.full(n, 1e-4), np.zeros(n), np.zeros(n), 2650.0,
-                                         1000.0, 5e-8, 0.0, k_l)
+                                         np.full(n, 1e-4), np.zeros(n), np.zeros(n), 1000.0,
+                                         material_row(rho_s=2650.0, k=5e-8), np.zeros(n), k_l)
         return p, poro, vol
 
     p, poro, _ = filtered(np.full(n, p0), np.full(n, n0))

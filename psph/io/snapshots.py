@@ -19,6 +19,8 @@ SNAPSHOT_FIELDS = {
     "n": ("1", "porosity"),
     "stress": ("Pa", "effective stress xx, yy, zz, xy, yz, zx, tension positive"),
     "eps_p": ("1", "equivalent plastic strain"),
+    "material": ("1", "index of the particle's material (0: [material] or the first of "
+                 "[[materials]], in scene order)"),
 }
 
 
@@ -36,6 +38,7 @@ def snapshot_arrays(store) -> dict[str, np.ndarray]:
         "n": store.poro[:n].copy(),
         "stress": stress6,
         "eps_p": store.eps_p[:n].copy(),
+        "material": store.material[:n].astype(np.int64),
     }
 
 
@@ -123,9 +126,9 @@ def write_xdmf(path: Path, h5name: str, entries, dim: int) -> None:
     for name, t, n in entries:
         base = f"{h5name}:/snapshots/{name}"
 
-        def item(field, comps, n=n, base=base):
+        def item(field, comps, n=n, base=base, kind="Float"):
             dims = f"{n}" if comps == 1 else f"{n} {comps}"
-            return (f'<DataItem Dimensions="{dims}" NumberType="Float" Precision="8" '
+            return (f'<DataItem Dimensions="{dims}" NumberType="{kind}" Precision="8" '
                     f'Format="HDF">{base}/{field}</DataItem>')
 
         attrs = "".join(
@@ -134,6 +137,8 @@ def write_xdmf(path: Path, h5name: str, entries, dim: int) -> None:
             for f, c in (("p", 1), ("n", 1), ("eps_p", 1), ("u", dim), ("v", dim)))
         attrs += (f'<Attribute Name="stress" AttributeType="Tensor6" Center="Node">'
                   f'{item("stress", 6)}</Attribute>')
+        attrs += (f'<Attribute Name="material" AttributeType="Scalar" Center="Node">'
+                  f'{item("material", 1, kind="Int")}</Attribute>')
         grids.append(
             f'<Grid Name="{name}" GridType="Uniform"><Time Value="{t:.9g}"/>'
             f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}"/>'

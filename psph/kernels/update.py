@@ -18,6 +18,19 @@ SCHEME_EXPLICIT = 1
 SCHEME_TPI = 2
 SCHEME_PROJECTION = 3  # p^(n+1) solved before `advance` (psph/kernels/projection.py)
 
+# columns of the material table (`psph.physics.material.material_table`): one row per
+# material, indexed by a particle's `material` field (issue 16)
+MAT_LAM = 0  # Lame lambda (Pa)
+MAT_SHEAR = 1  # shear modulus mu (Pa)
+MAT_BULK3 = 2  # 3K = 3 lambda + 2 mu (Pa)
+MAT_RHO_S = 3  # grain density rho_s (kg/m^3)
+MAT_K = 4  # hydraulic conductivity k_sat of Eq. (4) (m/s)
+MAT_C_K = 5  # C_k of Eq. (4); 0: constant k
+MAT_N_MIN = 6  # porosity floor of Eq. (24); 0: none
+MAT_PLASTIC = 7  # 1: Drucker-Prager, 0: elastic
+MAT_DP = 8  # 7 columns: phi_p, phi_r, c_p, c_r, psi_0, eta, s_f (Eq. 17-19, radians)
+MAT_COLUMNS = MAT_DP + 7
+
 
 @nb.njit(cache=True, inline="always")
 def _inverse_moment(s):
@@ -74,7 +87,7 @@ def set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, rho_s, rho_l, k_sa
 
 @nb.njit(cache=True)
 def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, vol, vol0,
-                                   rho, perm, rho_s, rho_l, k_sat, c_k, bulk3):
+                                   rho, perm, rho_l, mat, material):
     """Move the porosity with the volumetric strain that the stress filter took out of (or
     put into) the effective stress, so that both keep carrying the same strain.
 
@@ -85,17 +98,19 @@ def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, v
     debris-front surface particle with 9-11 neighbours, p held at 0 by ponding) compacts in
     n while the filter keeps erasing the stress that would resist it: n 0.40 -> 0.021 in
     27 s (issue 13, README). Here n += (1 - n) d_tr / (3K), the elastic strain of d_tr.
-    bulk3 = 3K = 3 lambda + 2 mu; trace_before: tr(sigma') before the filter."""
+    3K = 3 lambda + 2 mu, rho_s, k_sat and c_k: the row of the particle's material in the
+    table `mat` (MAT_* columns); trace_before: tr(sigma') before the filter."""
     for i in range(n_owned):
+        row = mat[int(material[i])]
         d_tr = stress[i, 0] + stress[i, 1] + stress[i, 2] - trace_before[i]
         n_i = poro[i]
-        set_porosity(i, n_i + (1.0 - n_i) * d_tr / bulk3, poro, poro0, vol, vol0, rho, perm,
-                     rho_s, rho_l, k_sat, c_k)
+        set_porosity(i, n_i + (1.0 - n_i) * d_tr / row[MAT_BULK3], poro, poro0, vol, vol0,
+                     rho, perm, row[MAT_RHO_S], rho_l, row[MAT_K], row[MAT_C_K])
 
 
 @nb.njit(cache=True)
 def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol0, rho, perm,
-                                     rho_s, rho_l, k_sat, c_k, bulk_water):
+                                     rho_l, mat, material, bulk_water):
     """Move the porosity with the volumetric strain that the pressure filter (Eq. 46) took
     out of (or put into) the pore pressure, so that p and n keep carrying the same strain.
 
@@ -106,12 +121,14 @@ def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol
     README). Here n += -(1 - n) n dp / K_l, the strain of dp. p_before: p before the filter.
     Off by default (`stabilisation.pressure_filter_porosity`): read as an exchange of pore
     water between neighbours, the filter moves no strain, and with the ponding clip this
-    version compacts free-surface particles (README cause 12)."""
+    version compacts free-surface particles (README cause 12). rho_s, k_sat, c_k: the row
+    of the particle's material in `mat`."""
     for i in range(n_owned):
+        row = mat[int(material[i])]
         n_i = poro[i]
         dp = p[i] - p_before[i]
         set_porosity(i, n_i - (1.0 - n_i) * n_i * dp / bulk_water, poro, poro0, vol, vol0,
-                     rho, perm, rho_s, rho_l, k_sat, c_k)
+                     rho, perm, row[MAT_RHO_S], rho_l, row[MAT_K], row[MAT_C_K])
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -151,31 +168,35 @@ def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, 
 
 @nb.njit(cache=True, error_model="numpy")
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
-            acc, drained_from, t, load_index, traction, load_value, dt, lam, shear,
-            bulk_water, gamma_l, rho_l, rho_s, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box, plastic, dp, eps_p, ponding, k_sat, c_k, kicked,
-            n_min):
+            acc, drained_from, t, load_index, traction, load_value, dt, mat, material,
+            bulk_water, gamma_l, rho_l, b0, b1, damping, scheme, alpha, beta,
+            acc_term, correct_strain, box, plastic, eps_p, ponding, kicked):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
-    lam, shear: Lame constants (Pa); bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3);
+    mat: the material table (n_materials, MAT_COLUMNS), row int(material[i]) for particle
+    i: Lame constants lambda, mu (Pa), rho_s, k_sat and c_k of Eq. (4), the porosity floor
+    n_min (0: none), the Drucker-Prager flag and parameters (issue 16);
+    bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
     1 explicit Eq. (25), 2 TPI Eq. (38), with Eq. (47) for p < 0 when beta > 0 (alpha,
     beta: Eq. 39 and 47), 3 projection (p already solved); p = 0 is imposed where
     drained_from <= t.
-    plastic: the elastic trial stress is returned to the Drucker-Prager surface with the
-    parameters dp = (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) (Eq. 13-19) and eps_p
-    accumulates the equivalent plastic strain.
-    ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the hydraulic
-    conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
+    plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
+    whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
+    psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain.
+    ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
+    hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
     kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
     gradient of the new v; only the position moves with it here.
-    n_min: floor of the porosity (0: none).
     """
     bad = -1
     inv_g = rho_l / gamma_l
     for i in range(n_owned):
         s = sums[i]
+        row = mat[int(material[i])]
+        lam = row[MAT_LAM]
+        shear = row[MAT_SHEAR]
         m00, m01, m10, m11 = _inverse_moment(s)
         # velocity gradient L[a, b] = dv_a/dx_b = G[a, n] Minv[n, b]   (Eq. 22): the
         # stretching (diagonal) from Gv + Gs, the shear from Gv (interactions.py: a fixed
@@ -215,10 +236,11 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         stress[i, 1] = syy + dt * (lam * l00 + (lam + 2.0 * shear) * l11 - 2.0 * w * sxy)
         stress[i, 2] += dt * lam * (l00 + l11)
         stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
-        if plastic:
+        if plastic and row[MAT_PLASTIC] > 0.0:
+            d = MAT_DP
             r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_p[i],
-                          lam + 2.0 * shear / 3.0, shear, dp[0], dp[1], dp[2], dp[3], dp[4],
-                          dp[5], dp[6])
+                          lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1], row[d + 2],
+                          row[d + 3], row[d + 4], row[d + 5], row[d + 6])
             stress[i, 0] = r[0]
             stress[i, 1] = r[1]
             stress[i, 2] = r[2]
@@ -263,12 +285,12 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
                 if p_prev[i] > 0.0 or ponding == 2:
                     p_prev[i] = 0.0
             n_new = poro[i] + dt * dn
-            if n_new < n_min:
+            if n_new < row[MAT_N_MIN]:
                 # Eq. (24) alone lets a free-surface particle (p imposed, so no pressure
                 # feedback) drift to n <= 0, where K_l / n of Eq. (25) changes sign
-                n_new = n_min
-            set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, rho_s, rho_l, k_sat,
-                         c_k)
+                n_new = row[MAT_N_MIN]
+            set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, row[MAT_RHO_S], rho_l,
+                         row[MAT_K], row[MAT_C_K])
 
         if not kicked:
             _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1,

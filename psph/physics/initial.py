@@ -19,20 +19,38 @@ def soil_positions(scene) -> np.ndarray:
     return seed(scene)[0]
 
 
+def soil_materials(scene) -> np.ndarray:
+    """The material index of each particle of `soil_positions` (float64): its source's
+    `material`; a lattice point in several fill sources takes the last one's."""
+    return seed(scene, material=True)[2]
+
+
+def material_arrays(scene, material: np.ndarray) -> dict[str, np.ndarray]:
+    """Per-particle porosity, grain density and conductivity of each particle's material
+    (index array `material`): the values of its row (with one material, the scene's
+    scalars in every element)."""
+    mats = scene.material_list
+    idx = material.astype(np.int64)
+    return {key: np.array([getattr(m, key) for m in mats], float)[idx]
+            for key in ("porosity", "rho_s", "k")}
+
+
 def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | None = None
                       ) -> dict[str, np.ndarray]:
     """Positions, ids and every field's initial value of the particles in `slab` (axis,
     lo, hi: coordinate along axis in [lo, hi)), default all of them. Collective over the
     ranks of `reducer` (each passing its own slab)."""
     dx = scene.particles.dx
-    x, key = seed(scene, *(slab or ()), reducer=reducer)
+    x, key, material = seed(scene, *(slab or ()), reducer=reducer, material=True)
     bounds = extent(x, reducer)
     n = len(x)
-    m = scene.material
-    poro = np.full(n, m.porosity)
+    m = scene.material  # the pore fluid (one for every material)
+    per = material_arrays(scene, material)
+    poro = per["porosity"]
     vol = np.full(n, dx * dx)
     # a dry scene (no pore-pressure stages) has empty pores
-    rho = (1 - poro) * m.rho_s + (poro * m.rho_l if scene.pressure.scheme != "none" else 0.0)
+    rho = (1 - poro) * per["rho_s"] + \
+        (poro * m.rho_l if scene.pressure.scheme != "none" else 0.0)
     data = {
         "key": key.astype(float),
         "x": x,
@@ -41,7 +59,8 @@ def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | No
         "vol": vol,
         "vol0": vol.copy(),
         "rho": rho,
-        "perm": np.full(n, m.k),
+        "perm": per["k"],
+        "material": material,
         "drained_from": np.full(n, math.inf),
         "load_index": np.full(n, -1.0),
         "traction": np.zeros((n, 2)),
@@ -111,8 +130,11 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
     (sigma'_v from the weight of the soil above, sigma'_h = sigma'_zz = K0 sigma'_v), in
     place. The ground surface above a particle is the top of its particle column.
 
-    Total vertical stress sigma_v = -rho g d at depth d (tension positive), and Eq. (2)
-    sigma' = sigma + p I gives sigma'_v = -rho g d + p.
+    Total vertical stress: the weight of the soil above in the particle's lattice column,
+    sigma_v = -g integral rho dz (tension positive) with each particle's own mixture
+    density over its dx and half of its own (`overburden`); in a column of one density
+    this is -rho g d at depth d, computed so (the same bits as before several materials).
+    Eq. (2) sigma' = sigma + p I gives sigma'_v = sigma_v + p.
 
     `data` may be one slab's particles: `bounds` (`lattice.extent`) and `reducer` give the
     smallest and largest x and the column tops of all of them.
@@ -142,9 +164,57 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
         data["p"] = p
         data["p_prev"] = p.copy()
     if init.k0 is not None:
-        sigma_v = -data["rho"] * g * depth + data.get("p", np.zeros(n))
+        sigma_v = -data["rho"] * g * depth
+        if len(scene.material_list) > 1:
+            sigma_v -= g * overburden(data["rho"], x[:, 1], column, len(top), dx, reducer)
+        sigma_v += data.get("p", np.zeros(n))
         stress = np.zeros((n, 4))
         stress[:, 0] = init.k0 * sigma_v
         stress[:, 1] = sigma_v
         stress[:, 2] = init.k0 * sigma_v
         data["stress"] = stress
+
+
+def overburden(rho: np.ndarray, y: np.ndarray, column: np.ndarray, n_columns: int,
+               dx: float, reducer=SERIAL) -> np.ndarray:
+    """The part of the column's weight per area above each particle (kg/m^2) that
+    rho_i d_i misses: sum over the particles j above i in its lattice column of
+    (rho_j - rho_i) dx, so that rho_i d_i + this = the integral of rho over the column
+    from its top to particle i's centre (each particle above over its dx, i's own over
+    dx / 2; a gap in the column counts with rho_i, as the single-density formula does).
+    Exactly 0 in a column of one density.
+
+    Each column's running sum goes from its top down, particle by particle (a padded 2D
+    cumulative sum), the same additions in the same order on any number of ranks: with
+    slabs cut along x a column lies on one rank; with slabs cut along y (in rank order
+    upward) each rank continues the running sums the ranks above it hand down, one
+    reduction a rank (set-up only)."""
+    ref = np.full(n_columns, -np.inf)
+    np.maximum.at(ref, column, rho)
+    ref = reducer.max(ref)  # one reference density a column, so equal rho give d = 0
+    d = rho - ref[column]
+    order = np.lexsort((-y, column))  # by column, each from its top down
+    cols, slot, counts = np.unique(column[order], return_inverse=True, return_counts=True)
+    first = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    pos = np.arange(len(order)) - first[slot]  # particles above, on this rank
+    grid = np.zeros((len(cols), (counts.max() if len(counts) else 0) + 1))
+    running = np.zeros(2 * n_columns)  # sum of d and count above this rank, per column
+    count_above = np.zeros(len(cols))
+    for r in range(reducer.size - 1, -1, -1):
+        if r == reducer.rank:
+            grid[:, 0] = running[cols]
+            count_above = running[n_columns + cols]
+            grid[slot, pos + 1] = d[order]
+            np.cumsum(grid, axis=1, out=grid)
+            mine = running.copy()
+            mine[cols] = grid[np.arange(len(cols)), counts]
+            mine[n_columns + cols] += counts
+        else:
+            mine = np.zeros(2 * n_columns)
+        if reducer.size > 1:
+            running = reducer.sum(mine) if r > 0 else running
+    above = np.empty_like(d)
+    above[order] = grid[slot, pos]  # sum of d over the particles above
+    count = np.empty_like(d)
+    count[order] = pos + count_above[slot]
+    return (above - count * d) * dx

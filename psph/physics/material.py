@@ -50,10 +50,10 @@ class ElasticSoil:
         return (1 - n) * self.rho_s + n * self.rho_l
 
 
-def plasticity_parameters(scene) -> np.ndarray:
+def plasticity_parameters(scene, material=None) -> np.ndarray:
     """(phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) for the kernels, angles in radians
-    (Eq. 17-19); zeros for an elastic material."""
-    pl = scene.material.plasticity
+    (Eq. 17-19); zeros for an elastic material. `material`: default the scene's first."""
+    pl = (scene.material if material is None else material).plasticity
     if pl is None:
         return np.zeros(7)
     phi_r = pl.phi if pl.phi_r is None else pl.phi_r
@@ -62,7 +62,88 @@ def plasticity_parameters(scene) -> np.ndarray:
                      math.radians(pl.psi), pl.eta, pl.s_f])
 
 
-def soil_from_scene(scene) -> ElasticSoil:
-    m = scene.material
+def soil_from_scene(scene, material=None) -> ElasticSoil:
+    """The constants of one material (default: the first; its fluid is every one's)."""
+    m = scene.material if material is None else material
     return ElasticSoil(E=m.E, nu=m.nu, rho_s=m.rho_s, rho_l=m.rho_l, K_l=m.K_l,
                        gamma_l=m.rho_l * m.g_ref, porosity=m.porosity, conductivity=m.k)
+
+
+def material_table(scene) -> np.ndarray:
+    """(n_materials, MAT_COLUMNS) float64: the row of each material, indexed by the
+    particle field `material`, in the column layout of psph/kernels/update.py (MAT_*):
+    Lame constants and 3K = 3 lambda + 2 mu (Eq. 11), rho_s (Eq. 24 with Eq. 8), k and
+    C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
+    (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19). The values are the same
+    floats as the scalars the kernels took before several materials (issue 16)."""
+    from psph.kernels.update import (
+        MAT_BULK3,
+        MAT_C_K,
+        MAT_COLUMNS,
+        MAT_DP,
+        MAT_K,
+        MAT_LAM,
+        MAT_N_MIN,
+        MAT_PLASTIC,
+        MAT_RHO_S,
+        MAT_SHEAR,
+    )
+
+    mats = scene.material_list
+    table = np.zeros((len(mats), MAT_COLUMNS))
+    for i, m in enumerate(mats):
+        s = soil_from_scene(scene, m)
+        table[i, MAT_LAM] = s.lam
+        table[i, MAT_SHEAR] = s.shear
+        table[i, MAT_BULK3] = 3.0 * s.lam + 2.0 * s.shear
+        table[i, MAT_RHO_S] = m.rho_s
+        table[i, MAT_K] = m.k
+        table[i, MAT_C_K] = m.C_k
+        table[i, MAT_N_MIN] = m.porosity_min
+        table[i, MAT_PLASTIC] = 1.0 if m.model == "drucker_prager" else 0.0
+        table[i, MAT_DP:MAT_DP + 7] = plasticity_parameters(scene, m)
+    return table
+
+
+def stiffest(scene) -> ElasticSoil:
+    """The material with the fastest solid wave sqrt(E / rho_s) of Eq. (41): the
+    artificial viscosity's sound speed and the damping coefficient of Eq. (44) are taken
+    from it (one value for every pair and particle, the largest over the materials; the
+    first material when it is the only one). Ties: the first."""
+    mats = scene.material_list
+    speeds = [math.sqrt(m.E / m.rho_s) for m in mats]
+    return soil_from_scene(scene, mats[speeds.index(max(speeds))])
+
+
+def fastest_undrained(scene) -> float:
+    """The largest undrained c_sp of Eq. (28) over the materials."""
+    return max(soil_from_scene(scene, m).undrained_sound_speed for m in scene.material_list)
+
+
+def material_row(lam: float = 0.0, shear: float = 0.0, rho_s: float = 0.0, k: float = 0.0,
+                 c_k: float = 0.0, n_min: float = 0.0, dp: np.ndarray | None = None,
+                 bulk3: float | None = None) -> np.ndarray:
+    """A one-material table (1, MAT_COLUMNS) from constants, for kernels called outside a
+    run (the element tests, unit tests); dp: the 7 Drucker-Prager parameters or None
+    (elastic); bulk3 default 3 lambda + 2 mu."""
+    from psph.kernels.update import (
+        MAT_BULK3,
+        MAT_C_K,
+        MAT_COLUMNS,
+        MAT_DP,
+        MAT_K,
+        MAT_LAM,
+        MAT_N_MIN,
+        MAT_PLASTIC,
+        MAT_RHO_S,
+        MAT_SHEAR,
+    )
+
+    row = np.zeros((1, MAT_COLUMNS))
+    row[0, [MAT_LAM, MAT_SHEAR, MAT_RHO_S, MAT_K, MAT_C_K, MAT_N_MIN]] = \
+        (lam, shear, rho_s, k, c_k, n_min)
+    row[0, MAT_BULK3] = 3.0 * lam + 2.0 * shear if bulk3 is None else bulk3
+    if dp is not None:
+        row[0, MAT_PLASTIC] = 1.0
+        row[0, MAT_DP:MAT_DP + 7] = dp
+    return row

@@ -60,6 +60,11 @@ class Fill:
         self.meshes = [read_mesh(m.file) for m in pa.meshes]
         self.layers = [check_layer_profiles(layer, f"particles.layers[{il}]")
                        for il, layer in enumerate(pa.layers)]
+        from psph.scene_material import material_index
+
+        # each source's material index, in the order polygons, meshes, layers
+        self.indices = [material_index(scene, src.material)
+                        for src in (*pa.polygons, *pa.meshes, *pa.layers)]
         corners = list(self.polygons) + [xy[tri.ravel()] for xy, tri in self.meshes]
         for top, bottom in self.layers:
             x0, x1 = max(top[0, 0], bottom[0, 0]), min(top[-1, 0], bottom[-1, 0])
@@ -87,6 +92,23 @@ class Fill:
         for top, bottom in self.layers:
             taken |= inside_layer(points, top, bottom)
         return taken
+
+    def material(self, points: np.ndarray) -> np.ndarray:
+        """The material index (float64) of points inside the fill: that of the last source
+        (polygons, then meshes, then layers, each in scene order) that holds the point, as
+        the fill takes a point once however many sources hold it. With one material every
+        point gets 0 and no source is tested."""
+        from psph.scenes.profiles import inside_layer
+
+        index = np.zeros(len(points))
+        if not any(self.indices):
+            return index
+        tests = [lambda v=v: inside_polygon(points, v) for v in self.polygons]
+        tests += [lambda m=m: inside_triangles(points, *m) for m in self.meshes]
+        tests += [lambda lay=lay: inside_layer(points, *lay) for lay in self.layers]
+        for test, k in zip(tests, self.indices, strict=True):
+            index[test()] = k
+        return index
 
 
 def _grid(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
@@ -127,12 +149,15 @@ def _in_slab(c: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 
 def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
-         reducer=SERIAL) -> tuple[np.ndarray, np.ndarray]:
+         reducer=SERIAL, material: bool = False) -> tuple[np.ndarray, ...]:
     """Positions (n, 2) and global ids (n,) int64 of the particles whose coordinate along
     `axis` lies in [lo, hi), in id order (collective: two reductions of the fill's per-row
-    counts). The default slab is the whole scene on one process."""
+    counts). The default slab is the whole scene on one process. `material`: also each
+    particle's material index (n,) float64, that of its source (`Fill.material`)."""
+    from psph.scene_material import material_index
+
     dx = scene.particles.dx
-    xs_out, keys = [], []
+    xs_out, keys, mats = [], [], []
     offset = 0
     for b in scene.particles.blocks:
         c = lattice_axes(b.min, b.max, dx)
@@ -140,6 +165,7 @@ def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
         idx[axis] = _in_slab(c[axis], lo, hi)
         xs_out.append(_grid(c[0][idx[0]], c[1][idx[1]]))
         keys.append((offset + idx[1][:, None] * len(c[0]) + idx[0][None, :]).ravel())
+        mats.append(np.full(len(keys[-1]), float(material_index(scene, b.material))))
         offset += len(c[0]) * len(c[1])
     fill = Fill(scene)
     if not fill.empty:
@@ -159,6 +185,10 @@ def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
         key = first[idx[1]][:, None] + np.cumsum(taken, axis=1, dtype=np.int64) - 1
         xs_out.append(points[taken.ravel()])
         keys.append(key[taken])
+        if material:
+            mats.append(fill.material(xs_out[-1]))
+    if material:
+        return np.concatenate(xs_out), np.concatenate(keys), np.concatenate(mats)
     return np.concatenate(xs_out), np.concatenate(keys)
 
 

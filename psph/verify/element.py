@@ -50,7 +50,7 @@ from psph.kernels.interactions import NSUMS, pair_sums
 from psph.kernels.neighbours import cell_lists
 from psph.kernels.plasticity import dp_return
 from psph.kernels.update import SCHEME_EXPLICIT, advance
-from psph.physics.material import ElasticSoil
+from psph.physics.material import ElasticSoil, material_row
 
 PATHS = ("compression", "shear")
 DEFAULT_RATE = {"compression": 5e-3, "shear": 1e-2}  # 1/s: 2 % axial, 4 % shear at 4 s
@@ -255,6 +255,8 @@ class _SphBlock:
         self.par, self.path, self.rate = par, path, rate
         self.correct_strain = correct_strain
         self.dp = par.plasticity(psi_deg)
+        self.mat = material_row(par.soil.lam, par.soil.shear, par.rho_s, par.perm,
+                                dp=self.dp)
         self.h = par.h_factor * par.dx
         x, self.centre = _lattice(par)
         n = self.n = len(x)
@@ -270,6 +272,7 @@ class _SphBlock:
         self.vol0 = np.full(n, par.dx**2)
         self.drained_from = np.full(n, 0.0 if drained else np.inf)
         self.load_index = np.full(n, -1, np.int64)
+        self.material = np.zeros(n)
         self.traction = np.zeros((n, 2))
         self.load_value = np.zeros(1)
         self.box = np.array([-1e3, -1e3, 1e3, 1e3])
@@ -291,10 +294,10 @@ class _SphBlock:
         bad = advance(self.n, self.sums, st["x"], st["u"], v, st["stress"], st["p"],
                       st["p_prev"], st["poro"], self.poro0, st["vol"], self.vol0, st["rho"],
                       st["perm"], st["acc"], self.drained_from, self.t, self.load_index,
-                      self.traction, self.load_value, par.dt, par.soil.lam, par.soil.shear, par.K_l,
-                      par.rho_l * par.g, par.rho_l, par.rho_s, 0.0, 0.0, 0.0, SCHEME_EXPLICIT,
-                      0.0, 0.0, False, self.correct_strain, self.box, True, self.dp,
-                      st["eps_p"], 0, par.perm, 0.0, True, 0.0)
+                      self.traction, self.load_value, par.dt, self.mat, self.material, par.K_l,
+                      par.rho_l * par.g, par.rho_l, 0.0, 0.0, 0.0, SCHEME_EXPLICIT,
+                      0.0, 0.0, False, self.correct_strain, self.box, True,
+                      st["eps_p"], 0, True)
         if bad >= 0:
             raise FloatingPointError(f"advance flagged particle {bad} at t = {self.t:g} s")
         c = self.centre
