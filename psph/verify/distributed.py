@@ -1,5 +1,6 @@
 """Snapshot metrics over the ranks without a global array (issue 15): each rank reads its
-share of a snapshot's rows, order statistics come from a bisection of counts, extremes
+share of a snapshot's rows, order statistics come from the slab cuts' bisection of counts
+(`order_statistics`), extremes
 from one small gather, and a neighbour sum from the rows of a slab of x with a halo.
 
 Every function is collective over `comm` (an mpi4py communicator; `MPI.COMM_SELF` for one
@@ -12,7 +13,7 @@ import h5py
 import numpy as np
 from mpi4py import MPI
 
-_FLIP = np.int64(0x7FFFFFFFFFFFFFFF)
+from psph.decomposition.slabs import distributed_cuts, order_statistics
 
 
 def share(n: int, comm) -> tuple[int, int]:
@@ -27,46 +28,6 @@ def read_share(group: h5py.Group, names, comm) -> dict[str, np.ndarray]:
     return {k: group[k][lo:hi] for k in names}
 
 
-def _allreduce(a: np.ndarray, comm, op) -> np.ndarray:
-    out = np.empty_like(a)
-    comm.Allreduce(np.ascontiguousarray(a), out, op=op)
-    return out
-
-
-def _keys(values: np.ndarray) -> np.ndarray:
-    """int64 keys in the order of the float64 values (negative floats flipped)."""
-    b = np.ascontiguousarray(values, dtype=np.float64).view(np.int64)
-    return np.where(b < 0, b ^ _FLIP, b)
-
-
-def _value(key: int) -> float:
-    b = np.int64(key)
-    return float(np.array([b ^ _FLIP if b < 0 else b], np.int64).view(np.float64)[0])
-
-
-def order_statistics(values: np.ndarray, ks, comm) -> list[float]:
-    """The k-th smallest (0-based) of all ranks' `values` for each k: one bisection over
-    the 2**64 ordered float keys, all k at once (64 small allreduces, no gather)."""
-    keys = np.sort(_keys(np.asarray(values, float)))
-    ks = np.asarray(ks, np.int64)
-    ext = np.array([-keys[0] if len(keys) else np.iinfo(np.int64).min,
-                    keys[-1] if len(keys) else np.iinfo(np.int64).min], np.int64)
-    ext = _allreduce(ext, comm, MPI.MAX)
-    lo = [-int(ext[0])] * len(ks)
-    hi = [int(ext[1])] * len(ks)
-    while any(a < b for a, b in zip(lo, hi, strict=True)):
-        mid = [a + (b - a) // 2 for a, b in zip(lo, hi, strict=True)]
-        count = np.searchsorted(keys, np.array(mid, np.int64), side="right").astype(np.int64)
-        count = _allreduce(count, comm, MPI.SUM)
-        for j, k in enumerate(ks):
-            if lo[j] < hi[j]:
-                if count[j] >= k + 1:
-                    hi[j] = mid[j]
-                else:
-                    lo[j] = mid[j] + 1
-    return [_value(a) for a in lo]
-
-
 def percentiles(values: np.ndarray, qs, comm) -> list[float]:
     """`np.percentile(all values, qs)` (method "linear") from the order statistics."""
     n = comm.allreduce(len(values))
@@ -74,7 +35,8 @@ def percentiles(values: np.ndarray, qs, comm) -> list[float]:
     virtual = (n - 1) * quantiles
     below = np.floor(virtual).astype(np.int64)
     above = np.minimum(below + 1, n - 1)
-    stats = order_statistics(values, np.concatenate([below, above]), comm)
+    stats = order_statistics(np.asarray(values, float), np.concatenate([below, above]),
+                             comm)
     a, b = np.array(stats[:len(qs)]), np.array(stats[len(qs):])
     gamma = virtual - below
     diff = b - a  # numpy's _lerp: from the nearer end
@@ -100,8 +62,6 @@ def with_halo(x: np.ndarray, fields: dict[str, np.ndarray], reach: float, comm
     """The rows of a slab of x (cuts by `distributed_cuts`, slabs at least `reach` wide)
     first, then copies of the other slabs' rows within `reach` of its faces: (x, fields,
     the number of owned rows). Rows keep their order within each source rank."""
-    from psph.decomposition.slabs import distributed_cuts
-
     size = comm.Get_size()
     if size == 1:
         return x, fields, len(x)
