@@ -13,6 +13,7 @@ import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from psph.errors import SceneError
+from psph.errors import SceneRule as _Rule
 from psph.limits import (  # noqa: F401  (re-exported: psph.scene.solid_dt_limit etc.)
     TPI_ALPHA_MAX,
     fluid_dt_limit,
@@ -23,6 +24,7 @@ from psph.limits import (  # noqa: F401  (re-exported: psph.scene.solid_dt_limit
     tpi_gain_limit,
     undrained_dt_limit,
 )
+from psph.scene_boundaries import Boundaries, Boundary, Polyline  # noqa: F401  (re-exported)
 
 Pos = Annotated[float, Field(gt=0)]
 Vec2 = Annotated[list[float], Field(min_length=2, max_length=2)]
@@ -111,21 +113,6 @@ class Material(_Model):
     C_k: Annotated[float, Field(ge=0.0)] = 0.0
     # floor of the porosity of Eq. (24) (the densest state of the soil); 0: none
     porosity_min: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.0
-
-
-class Boundary(_Model):
-    """One side of the domain box: wall motion and pore-water flow condition."""
-
-    motion: Literal["free", "slip", "fixed"] = "free"
-    flow: Literal["impermeable", "drained"] = "impermeable"
-    drained_from: Annotated[float, Field(ge=0.0)] = 0.0  # s; before it the side is impermeable
-
-
-class Boundaries(_Model):
-    left: Boundary = Boundary()
-    right: Boundary = Boundary()
-    bottom: Boundary = Boundary()
-    top: Boundary = Boundary()
 
 
 class Load(_Model):
@@ -365,6 +352,8 @@ class Scene(_Model):
         if self.pressure.scheme == "projection" and self.time.integrator != "symplectic":
             raise _Rule("pressure.scheme", "projection",
                         "needs time.integrator = 'symplectic' (the solve follows the kick)")
+        if self.pressure.scheme == "projection" and self.boundaries.polylines:
+            raise _Rule("pressure.scheme", "projection", "not yet with boundaries.polylines")
         if self.pressure.momentum != "pair" and self.pressure.scheme not in ("explicit", "tpi"):
             raise _Rule("pressure.momentum", self.pressure.momentum,
                         "needs pressure.scheme 'explicit' or 'tpi' (the projection's velocity "
@@ -458,12 +447,6 @@ def check_layer_profiles(layer: Layer, key: str):
     except ProfileError as e:
         raise _Rule(f"{key}.bottom", e.value, e.rule) from None
     return points["top"], points["bottom"]
-
-
-class _Rule(ValueError):
-    def __init__(self, key: str, value, rule: str):
-        super().__init__(rule)
-        self.key, self.value, self.rule = key, value, rule
 
 
 # ---------------------------------------------------------------------------- loading
