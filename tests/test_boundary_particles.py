@@ -109,6 +109,19 @@ def test_rows_fill_the_kernel_support_on_the_non_soil_side(soil):
     assert gap.max() < DX
 
 
+def test_a_wall_from_a_csv_file_with_the_soil_on_its_left(tmp_path):
+    """A retaining wall x(z) given as CSV rows (z increasing), soil = "left": three rows
+    (h = 1.3 dx) to its right, normals pointing to smaller x."""
+    from psph.scene_boundaries import Polyline, points_of
+
+    f = tmp_path / "wall.csv"
+    f.write_text("x, z\n0.5, 0.0\n0.5, 0.4\n")
+    pts = points_of(Polyline(points=str(f), soil="left"))
+    x, n, _ = boundary_particles(pts, "left", DX, 1.3 * DX)
+    assert np.allclose(np.unique(np.round(x[:, 0] - 0.5, 12)), [0.01, 0.03, 0.05])
+    assert len(x) == 3 * 20 and np.allclose(n, [-1.0, 0.0])
+
+
 def test_boundary_pressure_extends_the_hydrostatic_head():
     """Soil with p = rho_l g (H - z) above a V: the impermeable boundary particles get
     exactly the hydrostatic p at their own depth (Shepard average of p_j + rho_l b.(x_b -
