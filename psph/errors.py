@@ -7,6 +7,15 @@ class SceneError(Exception):
     exit_code = 2
 
 
+class SceneRule(ValueError):
+    """Raised inside a scene model's validator: the key, the value and the rule that
+    `psph.scene.validate` turns into one SceneError line."""
+
+    def __init__(self, key: str, value, rule: str):
+        super().__init__(rule)
+        self.key, self.value, self.rule = key, value, rule
+
+
 class NumericalError(Exception):
     """Numerical failure (NaN/inf, particle out of the domain, dt collapse). Exit code 3."""
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from psph.boundary import halo_width
 from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts
 from psph.errors import EARLY_STOP_SIGNALS, Interrupted, NumericalError, OutputError, SceneError
 from psph.io.checkpoint import read_history, read_restart, write_checkpoint
@@ -41,7 +42,7 @@ def make_slabs(scene: Scene, comm=None) -> Slabs:
 
     comm = MPI.COMM_WORLD if comm is None else comm
     axis = _slab_axis(scene)
-    width = 2.0 * scene.h
+    width = halo_width(scene)
     values, counts = census(scene, axis, CommReducer(comm))
     return Slabs(axis, cuts_from_counts(values, counts, comm.Get_size(), width), comm)
 
@@ -50,7 +51,7 @@ def _read_restart(path: Path, scene: Scene, comm) -> tuple[dict, dict]:
     """(meta, {"cuts", "particles": this rank's rows, "removed": its share of the removed
     ids}) of the checkpoint `path`, whose physics must be the scene's (collective)."""
     meta, cuts, particles, removed = read_restart(
-        path, comm, _slab_axis(scene), 2.0 * scene.h,
+        path, comm, _slab_axis(scene), halo_width(scene),
         check=lambda meta: check_restart_scene(meta["scene"], scene, f"--restart {path}"))
     return meta, {"cuts": cuts, "particles": particles, "removed": removed}
 

@@ -20,6 +20,7 @@ from pydantic import (
 )
 
 from psph.errors import SceneError
+from psph.errors import SceneRule as _Rule
 from psph.limits import (  # noqa: F401  (re-exported: psph.scene.solid_dt_limit etc.)
     TPI_ALPHA_MAX,
     fluid_dt_limit,
@@ -30,11 +31,11 @@ from psph.limits import (  # noqa: F401  (re-exported: psph.scene.solid_dt_limit
     tpi_gain_limit,
     undrained_dt_limit,
 )
+from psph.scene_boundaries import Boundaries, Boundary, Polyline  # noqa: F401  (re-exported)
 from psph.scene_material import (  # noqa: F401  (re-exported)
     Material,
     NamedMaterial,
     Plasticity,
-    _Rule,
     check_materials,
 )
 
@@ -98,19 +99,6 @@ class Particles(_Model):
     layers: list[Layer] = []
 
 
-class Boundary(_Model):
-    """One side of the domain box: wall motion and pore-water flow condition."""
-
-    motion: Literal["free", "slip", "fixed"] = "free"
-    flow: Literal["impermeable", "drained"] = "impermeable"
-    drained_from: Annotated[float, Field(ge=0.0)] = 0.0  # s; before it the side is impermeable
-
-
-class Boundaries(_Model):
-    left: Boundary = Boundary()
-    right: Boundary = Boundary()
-    bottom: Boundary = Boundary()
-    top: Boundary = Boundary()
 
 
 class Load(_Model):
@@ -347,6 +335,8 @@ class Scene(_Model):
         if self.pressure.scheme == "projection" and self.time.integrator != "symplectic":
             raise _Rule("pressure.scheme", "projection",
                         "needs time.integrator = 'symplectic' (the solve follows the kick)")
+        if self.pressure.scheme == "projection" and self.boundaries.polylines:
+            raise _Rule("pressure.scheme", "projection", "not yet with boundaries.polylines")
         if self.pressure.momentum != "pair" and self.pressure.scheme not in ("explicit", "tpi"):
             raise _Rule("pressure.momentum", self.pressure.momentum,
                         "needs pressure.scheme 'explicit' or 'tpi' (the projection's velocity "

@@ -7,6 +7,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from psph.errors import SceneRule as _Rule
+
 Pos = Annotated[float, Field(gt=0)]
 
 # the pore fluid is one fluid: these keys must agree across the materials
@@ -15,12 +17,6 @@ FLUID_KEYS = ("rho_l", "K_l", "g_ref")
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, validate_default=True)
-
-
-class _Rule(ValueError):
-    def __init__(self, key: str, value, rule: str):
-        super().__init__(rule)
-        self.key, self.value, self.rule = key, value, rule
 
 
 class Plasticity(_Model):

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psph.boundary import PolylineBoundaries, halo_width
 from psph.decomposition.census import Census
 from psph.drainage import Drainage
 from psph.errors import NumericalError
@@ -122,7 +123,11 @@ class Simulation:
         self.wall_fixed = np.array([b.motion == "fixed" for _, b in walls], np.bool_)
         # ghost velocities as on a free-slip wall, for the stretching rates (interactions.py);
         # without a fixed wall they are the velocities themselves
-        self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() else None
+        nw = len(walls)  # polyline boundary particles: sort keys above every ghost's
+        self.polylines = PolylineBoundaries(scene, float(self.n_ids) * (1 + nw + nw * nw)) \
+            if scene.boundaries.polylines else None
+        self.halo = halo_width(scene)
+        self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() or self.polylines else None
         self.ghost_src = np.zeros(0, np.int64)
         self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
         # the initial lattice's extent, also on a restart (x - u of a checkpoint is not
@@ -204,7 +209,11 @@ class Simulation:
             stages.append(Stage("reset_halo", self._reset_halo))
         if len(self.wall_axis):
             stages.append(Stage("ghosts", self._ghosts))
+        if self.polylines:
+            stages.append(Stage("boundary_rows", self._boundary_rows))
         stages.append(Stage("neighbours", self._neighbours))
+        if self.polylines:
+            stages.append(Stage("boundary_state", self._boundary_state))
         if self.coupled and self.drainage.has_planes:
             stages.append(Stage("drained_planes", self._drained_planes))
         m = self.scene.stabilisation.shepard_every
@@ -244,11 +253,11 @@ class Simulation:
         self.store.n_halo = self.store.n_ghost = 0
 
     def _rebalance(self) -> None:
-        self.slabs.rebalance(self.store, 2.0 * self.h,
+        self.slabs.rebalance(self.store, self.halo,
                              self.scene.decomposition.imbalance_threshold)
 
     def _exchange(self) -> None:
-        self.slabs.exchange(self.store, 2.0 * self.h)
+        self.slabs.exchange(self.store, self.halo)
 
     @property
     def v_slip(self) -> np.ndarray:
@@ -274,6 +283,26 @@ class Simulation:
                 st.n_ghost = ng
                 return
             st.ensure(2 * st.cap)
+
+    def _boundary_rows(self) -> None:
+        """Rows of the polyline boundary particles near this slab, after the ghosts."""
+        self.polylines.select(*self.slabs.slab)
+        while not self.polylines.append(self.store):
+            if len(self.wall_axis):  # the store grew: ghosts again (v_slip was reset)
+                self._ghosts()
+
+    def _boundary_state(self) -> None:
+        self.polylines.state(self.store, self.v_slip, self.head_b, self.cell_of,
+                             self.cell_start, self.order, self.ncell)
+
+    def _refresh_walls(self) -> None:
+        """Wall ghosts and boundary particles again from the current real rows."""
+        n_ghost = self.store.n_ghost  # the wall ghosts' count is unchanged
+        if len(self.wall_axis):
+            self._ghosts()
+        if self.polylines:
+            self.store.n_ghost = n_ghost
+            self._boundary_state()
 
     def _neighbours(self) -> None:
         st = self.store
@@ -327,7 +356,8 @@ class Simulation:
                 porosity_follows_stress_filter(
                     st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
                     st.perm, s.rho_l, self.mat, st.material)
-        for stage in self.stages[:self.stages.index(self._stage("neighbours")) + 1]:
+        last = "boundary_state" if self.polylines else "neighbours"
+        for stage in self.stages[:self.stages.index(self._stage(last)) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()
 
@@ -382,8 +412,7 @@ class Simulation:
         kick(st.n_owned, self.sums, st.v, st.acc, st.rho, st.vol, st.load_index, st.traction,
              self.load_value, self.body[0], self.body[1], self.damping, self.dt)
         self.slabs.refresh_halo(st.v)
-        if len(self.wall_axis):
-            self._ghosts()
+        self._refresh_walls()
         velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g, st.v,
                                self.v_slip, st.poro, st.vol, self.coupled, self.sums)
 
@@ -406,6 +435,9 @@ class Simulation:
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
+        if self.polylines:
+            self.polylines.contact(st, self.origin, self.cell_size, self.grid_lo, self.ncell,
+                                   self.cell_start, self.order)
 
     def _shift(self) -> None:
         """Particle shifting (`stabilisation.shifting`, psph/kernels/shifting.py) over the
@@ -439,8 +471,7 @@ class Simulation:
         self.slabs.refresh_halo(st.v)
         self.slabs.refresh_halo(st.p.reshape(-1, 1))
         self.slabs.refresh_halo(st.p_prev.reshape(-1, 1))
-        if len(self.wall_axis):
-            self._ghosts()
+        self._refresh_walls()
         velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g,
                                st.v, self.v_slip, st.poro, st.vol, self.coupled, self.sums)
 

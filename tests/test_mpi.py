@@ -502,3 +502,28 @@ def test_layered_k0_set_up_one_vs_two_ranks_bitwise(tmp_path_factory, axis):
     problems = sum(comm.allgather(problems), [])
     assert not problems, problems
     assert slabs.axis == "xy".index(axis) and 0 < mine.sum() < len(mine)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_polyline_boundaries_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """Boundary particles of polylines (issue 16) with the slab cut through them: the V
+    column (pore pressure, fixed wall, the cut at the V's tip) and the block sliding on a
+    friction incline across the cut. Each rank appends the boundary particles of its slab
+    plus 4h and averages soil from a 4h halo (psph/boundary.py)."""
+    from mpi4py import MPI
+
+    from tests.test_boundary_particles import INCLINE, V_COLUMN
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        (out / "v.toml").write_text(V_COLUMN)
+        (out / "incline.toml").write_text(INCLINE.format(
+            z0=0.341, z1=0.4796, z2=0.5835, z3=0.4449, interval=0.02,
+            motion='motion = "friction"\nfriction_angle = 20.0'))
+    comm.Barrier()
+    axis = ["decomposition.axis='x'"]
+    _one_vs_two(comm, load_scene(str(out / "v.toml"), axis + [
+        "initial.equilibrate=0.01", "time.end=0.01", "output.interval=0.005"]), out / "v")
+    _one_vs_two(comm, load_scene(str(out / "incline.toml"), axis + ["time.end=0.1"]),
+                out / "incline")

@@ -22,9 +22,10 @@ class ProfileError(ValueError):
         self.where, self.value, self.rule = where, value, rule
 
 
-def read_profile(value: list | str) -> np.ndarray:
+def read_profile(value: list | str, axis: int = 0) -> np.ndarray:
     """(k, 2) points of a profile given as [[x, z], ...] or as the path of a CSV file
-    with one x, z pair per row (a header row and `#` comments are skipped)."""
+    with one x, z pair per row (a header row and `#` comments are skipped). The
+    coordinate `axis` (0: x, 1: z, for a wall x(z)) must increase strictly."""
     if isinstance(value, str):
         path = Path(value)
         if not path.is_file():
@@ -52,12 +53,13 @@ def read_profile(value: list | str) -> np.ndarray:
         raise ProfileError("points", len(points), "a profile needs at least 2 points")
     if not np.all(np.isfinite(points)):
         raise ProfileError("points", "non-finite", "coordinates must be finite")
-    bad = np.flatnonzero(np.diff(points[:, 0]) <= 0.0)
+    bad = np.flatnonzero(np.diff(points[:, axis]) <= 0.0)
     if len(bad):
         i = int(bad[0]) + 1
+        c = "xz"[axis]
         raise ProfileError(f"point {i}", points[i].tolist(),
-                           f"x must increase along the profile (x = {points[i, 0]:g} after "
-                           f"{points[i - 1, 0]:g}): not monotonic in x")
+                           f"{c} must increase along the profile ({c} = {points[i, axis]:g} "
+                           f"after {points[i - 1, axis]:g}): not monotonic in {c}")
     return points
 
 

@@ -1,0 +1,247 @@
+"""Boundary particles of rigid polylines (issue 16): their state each step, and the
+no-penetration safety net.
+
+The state follows the generalized wall boundary condition of Adami, Hu & Adams (2012,
+J. Comput. Phys. 231, 7057), with the conventions of the plane mirror ghosts
+(`ghosts.py`). For a boundary particle b with unit normal n (into the soil), over the soil
+particles j (rows < n_real) within 2h, with W_bj of Eq. (21):
+
+  Shepard average   f~_b = sum_j f_j W_bj / sum_j W_bj          (velocity, stress, n, rho, k)
+  velocity          fixed:  v_b = -v~_b   (no slip: the wall velocity 0 is the mean of
+                                           v~ and v_b, Adami Eq. 22 with v_w = 0)
+                    slip:   v_b = v~_b - 2 (v~_b . n) n   (normal reversed, tangent kept)
+  v_slip            the slip mirror on every polyline (the stretching rates and the
+                    artificial viscosity take it, as on plane ghosts: `interactions.py`)
+  pore pressure     impermeable: p_b = sum_j (p_j + rho_l b . (x_b - x_j)) W_bj / sum W,
+                    the total head p + psi of Eq. (25) extended into the wall (Adami Eq. 27
+                    with the wall at rest), so that the wall is impermeable under gravity;
+                    drained: p_b = -p~_b (antisymmetric: p = 0 on the line)
+  effective stress  sigma'~_b, with its shear sigma'_tn in the wall's frame (t, n) kept on
+                    a fixed wall (it resists sliding) and reversed on a slip wall (the pair
+                    stress of Eq. 26, (sigma_a + sigma_b)/2, carries no shear across it)
+  friction          Coulomb, per boundary particle, from the averaged stress of the soil in
+                    front of it: the limit is tau_max = tan(phi_b) max(-sigma'~_nn, 0). If
+                    |sigma'~_tn| <= tau_max the wall sticks (as a fixed wall); else it
+                    slides: the velocity as on a slip wall, and sigma'_tn,b = 2 s tau_max -
+                    sigma'~_tn (s = sign sigma'~_tn), so that the traction the pair stress
+                    of Eq. (26) carries across the wall, (sigma'~_tn + sigma'_tn,b) / 2, is
+                    the Coulomb limit s tau_max. Both branches meet at |sigma'~_tn| =
+                    tau_max; tau_max = 0 is the slip wall.
+  acceleration      as the velocity (the div(k dv/dt) term of Eq. 25)
+
+A boundary particle without soil within 2h interacts with no soil either; it gets v = 0,
+p = 0, sigma' = 0.
+"""
+
+import math
+
+import numba as nb
+
+from psph.kernels.spline import w_cubic
+
+MOTION_FIXED = 0
+MOTION_SLIP = 1
+MOTION_FRICTION = 2
+
+
+@nb.njit(cache=True)
+def _shear_frame(n0, n1):
+    """Tangent t = (n1, -n0) and S = t n^T + n t^T (xx, yy, xy) of the wall frame."""
+    t0 = n1
+    t1 = -n0
+    return t0, t1, 2.0 * t0 * n0, 2.0 * t1 * n1, t0 * n1 + t1 * n0
+
+
+@nb.njit(cache=True)
+def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x, v, v_slip,
+                   stress, p, p_prev, poro, rho, perm, acc, head_b, cell_of, cell_start,
+                   order, ncell, h):
+    """State of the boundary rows first..first+n_b-1 (see the module docstring); src[r]
+    is the polyline boundary particle of row first + r, whose polyline has `motion`,
+    `tan_phi` and `drained` (per boundary particle) and its soil normal `normal`. Also
+    copies v into v_slip on rows 0..n_real-1. The neighbour loop visits the 3 x 3 cells
+    around each boundary particle in a fixed order and a cell's particles in key order
+    (`neighbours.py`): the sums are the same on any number of ranks as long as every soil
+    particle within 2h of the boundary particle is a real row (halo of 4h)."""
+    for j in range(n_real):
+        v_slip[j, 0] = v[j, 0]
+        v_slip[j, 1] = v[j, 1]
+    ncx = ncell[0]
+    ncy = ncell[1]
+    support2 = 4.0 * h * h
+    for r in range(n_b):
+        b = first + r
+        k = src[r]
+        c = cell_of[b]
+        cx = c % ncx
+        cy = c // ncx
+        ws = 0.0
+        sv0 = sv1 = sa0 = sa1 = 0.0
+        sp = spp = 0.0
+        s0 = s1 = s2 = s3 = 0.0
+        sn = sr = sk = 0.0
+        for oy in range(-1, 2):
+            ny = cy + oy
+            if ny < 0 or ny >= ncy:
+                continue
+            for ox in range(-1, 2):
+                nx = cx + ox
+                if nx < 0 or nx >= ncx:
+                    continue
+                nc = ny * ncx + nx
+                for s in range(cell_start[nc], cell_start[nc + 1]):
+                    j = order[s]
+                    if j >= n_real:
+                        continue
+                    d0 = x[b, 0] - x[j, 0]
+                    d1 = x[b, 1] - x[j, 1]
+                    r2 = d0 * d0 + d1 * d1
+                    if r2 >= support2:
+                        continue
+                    w = w_cubic(math.sqrt(r2), h)
+                    ws += w
+                    sv0 += w * v[j, 0]
+                    sv1 += w * v[j, 1]
+                    sa0 += w * acc[j, 0]
+                    sa1 += w * acc[j, 1]
+                    if drained[k]:
+                        sp -= w * p[j]
+                        spp -= w * p_prev[j]
+                    else:
+                        dp = head_b[0] * d0 + head_b[1] * d1
+                        sp += w * (p[j] + dp)
+                        spp += w * (p_prev[j] + dp)
+                    s0 += w * stress[j, 0]
+                    s1 += w * stress[j, 1]
+                    s2 += w * stress[j, 2]
+                    s3 += w * stress[j, 3]
+                    sn += w * poro[j]
+                    sr += w * rho[j]
+                    sk += w * perm[j]
+        if ws == 0.0:
+            v[b, 0] = v[b, 1] = v_slip[b, 0] = v_slip[b, 1] = 0.0
+            acc[b, 0] = acc[b, 1] = 0.0
+            p[b] = p_prev[b] = 0.0
+            for q in range(4):
+                stress[b, q] = 0.0
+            poro[b] = 0.5
+            rho[b] = 1.0
+            perm[b] = 0.0
+            continue
+        iw = 1.0 / ws
+        n0 = normal[k, 0]
+        n1 = normal[k, 1]
+        vt0 = sv0 * iw
+        vt1 = sv1 * iw
+        vn = vt0 * n0 + vt1 * n1
+        at0 = sa0 * iw
+        at1 = sa1 * iw
+        an = at0 * n0 + at1 * n1
+        sxx = s0 * iw
+        syy = s1 * iw
+        sxy = s3 * iw
+        t0, t1, m_xx, m_yy, m_xy = _shear_frame(n0, n1)
+        s_nn = n0 * (sxx * n0 + sxy * n1) + n1 * (sxy * n0 + syy * n1)
+        s_tn = t0 * (sxx * n0 + sxy * n1) + t1 * (sxy * n0 + syy * n1)
+        mode = motion[k]
+        if mode == MOTION_FRICTION:
+            cap = tan_phi[k] * max(-s_nn, 0.0)
+            if abs(s_tn) <= cap:
+                mode = MOTION_FIXED
+            else:
+                target = 2.0 * math.copysign(cap, s_tn) - s_tn
+                sxx += (target - s_tn) * m_xx
+                syy += (target - s_tn) * m_yy
+                sxy += (target - s_tn) * m_xy
+        elif mode == MOTION_SLIP:  # shear reversed: target - s_tn = -2 s_tn
+            sxx -= 2.0 * s_tn * m_xx
+            syy -= 2.0 * s_tn * m_yy
+            sxy -= 2.0 * s_tn * m_xy
+        v_slip[b, 0] = vt0 - 2.0 * vn * n0
+        v_slip[b, 1] = vt1 - 2.0 * vn * n1
+        if mode == MOTION_FIXED:
+            v[b, 0] = -vt0
+            v[b, 1] = -vt1
+            acc[b, 0] = -at0
+            acc[b, 1] = -at1
+        else:
+            v[b, 0] = v_slip[b, 0]
+            v[b, 1] = v_slip[b, 1]
+            acc[b, 0] = at0 - 2.0 * an * n0
+            acc[b, 1] = at1 - 2.0 * an * n1
+        stress[b, 0] = sxx
+        stress[b, 1] = syy
+        stress[b, 2] = s2 * iw
+        stress[b, 3] = sxy
+        p[b] = sp * iw
+        p_prev[b] = spp * iw
+        poro[b] = sn * iw
+        rho[b] = sr * iw
+        perm[b] = sk * iw
+
+
+@nb.njit(cache=True)
+def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
+                     grid_lo, ncell, cell_start, order, h):
+    """No penetration (safety net): an owned particle found on the wall side of the line
+    of its nearest boundary particle (within 2h, in the cell lists of this step) is
+    reflected back across that line, (x - foot) . n -> -(x - foot) . n, and loses its
+    velocity into the wall, as `ghosts.wall_contact` does for planes. Returns the number
+    moved."""
+    ncx = ncell[0]
+    ncy = ncell[1]
+    last = first + n_b
+    moved = 0
+    for i in range(n_owned):
+        cx = int(math.floor((x[i, 0] - origin[0]) / cell_size)) - grid_lo[0]
+        cy = int(math.floor((x[i, 1] - origin[1]) / cell_size)) - grid_lo[1]
+        best = -1
+        best_r2 = 4.0 * h * h
+        for oy in range(-1, 2):
+            ny = cy + oy
+            if ny < 0 or ny >= ncy:
+                continue
+            for ox in range(-1, 2):
+                nx = cx + ox
+                if nx < 0 or nx >= ncx:
+                    continue
+                nc = ny * ncx + nx
+                for s in range(cell_start[nc], cell_start[nc + 1]):
+                    b = order[s]
+                    if b < first or b >= last:
+                        continue
+                    d0 = x[i, 0] - x[b, 0]
+                    d1 = x[i, 1] - x[b, 1]
+                    r2 = d0 * d0 + d1 * d1
+                    if r2 < best_r2:
+                        best_r2 = r2
+                        best = b
+        if best < 0:
+            continue
+        k = src[best - first]
+        n0 = normal[k, 0]
+        n1 = normal[k, 1]
+        d = (x[i, 0] - foot[k, 0]) * n0 + (x[i, 1] - foot[k, 1]) * n1
+        if d < 0.0:
+            x[i, 0] -= 2.0 * d * n0
+            x[i, 1] -= 2.0 * d * n1
+            u[i, 0] -= 2.0 * d * n0
+            u[i, 1] -= 2.0 * d * n1
+            vn = v[i, 0] * n0 + v[i, 1] * n1
+            if vn < 0.0:
+                v[i, 0] -= vn * n0
+                v[i, 1] -= vn * n1
+            moved += 1
+    return moved
+
+
+@nb.njit(cache=True)
+def place_rows(first, n_b, src, bx, bkey, dx2, x, key, vol):
+    """Positions, sort keys and volumes (dx^2) of the selected boundary particles src at
+    rows first.. of the store."""
+    for r in range(n_b):
+        k = src[r]
+        x[first + r, 0] = bx[k, 0]
+        x[first + r, 1] = bx[k, 1]
+        key[first + r] = bkey[k]
+        vol[first + r] = dx2
