@@ -24,7 +24,7 @@ STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
 	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-field \
-	bench-field-window lint clean-env
+	bench-field-window bench-large lint clean-env
 
 env: $(STAMP)
 
@@ -75,6 +75,10 @@ bench-stability: env
 # peak memory and set-up time per rank, 0.5M-2M particles on 1, 2 and 4 ranks (issue 15)
 bench-memory: env
 	$(VPY) bench/memory.py
+
+# ~10M particles on 2 ranks: 100 steps, snapshot, checkpoint, restart; set-up on 1, 2, 4
+bench-large: env
+	$(VPY) bench/large_run.py
 
 # strong (20k, 100k, 400k) and weak scaling 1 -> 2 ranks
 bench-scaling: env
