@@ -1,6 +1,6 @@
 """Issue 16 experiment: a saturated layer at rest on a polyline (dipping with lattice steps,
 or horizontal at a chosen offset below a lattice row); excess p after t = 0.
-usage: dip_exp.py VARIANT OUT  (VARIANT: dip | flat_dx | flat_short | flat_long)"""
+usage (from the worktree, PYTHONPATH=. so that its psph is imported): dip_experiment.py VARIANT OUT  (VARIANT: dip | flat_dx | flat_short | flat_long)"""
 import sys
 
 import numpy as np
