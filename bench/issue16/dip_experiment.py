@@ -1,6 +1,8 @@
 """Issue 16 experiment: a saturated layer at rest on a polyline (dipping with lattice steps,
 or horizontal at a chosen offset below a lattice row); excess p after t = 0.
-usage (from the worktree, PYTHONPATH=. so that its psph is imported): dip_experiment.py VARIANT OUT  (VARIANT: dip | flat_dx | flat_short | flat_long)"""
+usage (from the worktree, PYTHONPATH=. so that its psph is imported):
+  dip_experiment.py VARIANT OUT [MOTION [EQUILIBRATE [KEY=VALUE ...]]]
+  VARIANT: dip | flat_dx | flat_short | flat_long"""
 import sys
 
 import numpy as np
@@ -72,5 +74,6 @@ for s in read_snapshots(f"{out}/particles.h5"):
     z0 = s["x"][:, 1] - s["u"][:, 1]
     zl = np.interp(s["x"][:, 0] - s["u"][:, 0], *np.array(eval(LINES[v])).T)
     base = (z0 - zl) < 1.5 * 0.5
-    print(f"{out} {v} {motion} t={s['time']:.2f} excess p kPa: all {ex.min():8.1f} {ex.max():8.1f}"
-          f"  base rows {ex[base].min():8.1f} {ex[base].max():8.1f}  |u|max {np.abs(s['u']).max():.2e}")
+    print(f"{out} {v} {motion} t={s['time']:.2f} excess p kPa: all {ex.min():8.1f} "
+          f"{ex.max():8.1f}  base rows {ex[base].min():8.1f} {ex[base].max():8.1f}"
+          f"  |u|max {np.abs(s['u']).max():.2e}")

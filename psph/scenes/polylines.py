@@ -119,11 +119,12 @@ def lattice_particles(points: np.ndarray, soil: str, dx: float, h: float, origin
     layer's rule bottom(x) <= z); the boundary particles are the rows j < s_i (counted away
     from the soil) within 2h of the soil of some column i' widened by dx/2 (where a plane
     wall would lie), (i - i')^2 + max(s_i' - 1/2 - j, 0)^2 < (2h/dx)^2: as deep as the
-    mirror ghosts of a plane wall (3 rows for h = 1.3 dx). So the first boundary row is exactly dx from the soil's lowest row in
-    every column, whatever the line's dip (the geometric rows of `boundary_particles` are
-    (k + 1/2) dx below the line, dx/2 to 3dx/2 from that row), and a steep column is filled
-    down to its neighbours' rows. Normal and foot stay geometric: the nearest point of the
-    line, with the segment's normal (the radial direction where it is an inner vertex)."""
+    mirror ghosts of a plane wall (3 rows for h = 1.3 dx). So the first boundary row is
+    exactly dx from the soil's lowest row in every column, whatever the line's dip (the
+    geometric rows of `boundary_particles` are (k + 1/2) dx below the line, dx/2 to 3dx/2
+    from that row), and a steep column is filled down to its neighbours' rows. Normal and
+    foot stay geometric: the nearest point of the line, with the segment's normal (the
+    radial direction where it is an inner vertex)."""
     points = np.asarray(points, float)
     axis = 0 if soil in ("above", "below") else 1  # the line is a function of this axis
     up = 1 - axis
