@@ -335,9 +335,10 @@ points = [[-1.0, 2.0349], [41.0, 0.5676]]
 soil = "above"
 motion = "friction"
 friction_angle = 20.0
+rows = "{rows}"
 [boundaries]
-left = { motion = "slip" }
-right = { motion = "slip" }
+left = {{ motion = "slip" }}
+right = {{ motion = "slip" }}
 [initial]
 water_table = 6.0
 k0 = 0.5
@@ -361,18 +362,18 @@ stress_filter = "mls"
 
 def test_a_saturated_layer_at_rest_on_a_dipping_polyline_keeps_its_pressure(tmp_path):
     """A 4-5 m saturated elastic layer (the till of slope_section) at rest on a 2 degree
-    dipping friction polyline, its lowest lattice row stepping up by dx every 14 m
-    against the line, with slope_section's stress filter (MLS every 30 steps). Boundary
+    dipping friction polyline (rows = "lattice"), its lowest lattice row stepping up by dx
+    every 14 m against the line, with slope_section's stress filter (MLS every 30 steps). Boundary
     particles on the soil's lattice (dx from its lowest row in every column) keep the
     excess p away from the side walls (3 m < x < 37 m) below 25 kPa at 0.1 and 0.2 s
     (measured 17.1 kPa; the base's hydrostatic p is ~46 kPa) and its spread along the base
     row below 20 kPa (measured 13.0). With the rows (k + 1/2) dx below the line instead
     (dx/2 .. 3dx/2 from the soil's lowest row) the stress filter at the base turns the
-    varying gap into stripes: -56.5 to 40.4 kPa, base spread 88.5 kPa."""
+    varying gap into stripes (rows = "line"): -56.5 to 40.4 kPa, base spread 88.5 kPa."""
     from psph.verify.pressure import excess_pressure
 
     f = tmp_path / "dip.toml"
-    f.write_text(DIPPING)
+    f.write_text(DIPPING.format(rows="lattice"))
     snaps = _run(f, tmp_path)
     scene = load_scene(str(f))
     for s in snaps[1:]:
