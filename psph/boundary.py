@@ -1,8 +1,11 @@
 """Rigid polyline boundaries lined with boundary particles (issue 16; the paper's virtual
 particles, ref. [11]): set-up, the rows each rank holds, their state each step, contact.
 
-The boundary particles of all polylines are built once on every rank
-(`scenes/polylines.py`; their number scales with the perimeter, not the soil). They never
+The boundary particles of all polylines are built once on every rank: rows (k + 1/2) dx
+from the line (`scenes/polylines.boundary_particles`), or with `rows = "lattice"` on the
+domain's particle lattice (`lattice_particles`: the first boundary row dx from the soil's
+lowest row in every column, as the mirror ghosts of a plane wall). Their number scales
+with the perimeter, not the soil. They never
 move or migrate: each step a rank appends those within its slab plus 4h after the wall
 ghosts (rows n_real + n_wall_ghosts ..; the selection is recomputed only when the slab
 moves), then, after the neighbour search, sets their state from the soil around them
@@ -28,7 +31,7 @@ from psph.kernels.boundary import (
 )
 from psph.scene import Scene
 from psph.scene_boundaries import points_of
-from psph.scenes.polylines import boundary_particles
+from psph.scenes.polylines import boundary_particles, lattice_particles
 
 _MOTION = {"fixed": MOTION_FIXED, "slip": MOTION_SLIP, "friction": MOTION_FRICTION}
 
@@ -51,7 +54,10 @@ class PolylineBoundaries:
         xs, ns, fs, motion, tan_phi, drained = [], [], [], [], [], []
         for i, line in enumerate(scene.boundaries.polylines):
             pts = points_of(line, f"boundaries.polylines[{i}]")
-            x, n, f = boundary_particles(pts, line.soil, dx, h)
+            if line.rows == "lattice":  # the domain's lattice: dx from the soil's lowest row
+                x, n, f = lattice_particles(pts, line.soil, dx, h, scene.domain.min, lo, hi)
+            else:
+                x, n, f = boundary_particles(pts, line.soil, dx, h)
             inside = np.all((x >= lo) & (x <= hi), axis=1)  # beyond: no soil can reach
             xs.append(x[inside])
             ns.append(n[inside])

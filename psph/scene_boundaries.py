@@ -33,13 +33,17 @@ class Polyline(_Model):
     motion: "fixed" (no slip), "slip" (frictionless) or "friction" (Coulomb, with
     `friction_angle` phi_b in degrees, 0 <= phi_b < 90: the wall's shear traction is at
     most tan(phi_b) times the normal effective traction). drained: p = 0 on the line
-    (the pore pressure of the boundary particles is antisymmetric); else impermeable."""
+    (the pore pressure of the boundary particles is antisymmetric); else impermeable.
+    rows: "line" (rows (k + 1/2) dx from the line, `polylines.boundary_particles`) or
+    "lattice" (on the soil's lattice, dx from its lowest row in every column,
+    `polylines.lattice_particles`: for seeded soil at rest on a gently dipping line)."""
 
     points: list[list[float]] | str
     soil: Literal["above", "below", "left", "right"]
     motion: Literal["fixed", "slip", "friction"] = "fixed"
     friction_angle: float | None = None
     drained: bool = False
+    rows: Literal["line", "lattice"] = "line"
 
 
 def points_of(line: Polyline, key: str = "polyline"):

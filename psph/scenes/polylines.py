@@ -93,3 +93,92 @@ def boundary_particles(points: np.ndarray, soil: str, dx: float, h: float
             ns.append(-radial)
             fs.append(np.repeat(points[j][None], m, axis=0))
     return np.concatenate(xs), np.concatenate(ns), np.concatenate(fs)
+
+
+def _soil_start(line: np.ndarray, b0: float, dx: float, eps: float, sign: int) -> np.ndarray:
+    """Per lattice column: the first soil row in the direction `sign` (+1: soil above, the
+    lowest row j with b0 + (j + 1/2) dx >= line - eps, the rule of `inside_layer`; -1: soil
+    below, minus the highest row with z <= line + eps), so that the soil rows are j' >= s."""
+    if sign > 0:
+        j = np.ceil((line - eps - b0) / dx - 0.5).astype(np.int64)
+        z = lambda j: b0 + (j + 0.5) * dx  # noqa: E731  the lattice's floats
+        j = np.where(z(j - 1) >= line - eps, j - 1, j)
+        return np.where(z(j) < line - eps, j + 1, j)
+    j = np.floor((line + eps - b0) / dx - 0.5).astype(np.int64)
+    z = lambda j: b0 + (j + 0.5) * dx  # noqa: E731
+    j = np.where(z(j + 1) <= line + eps, j + 1, j)
+    return -np.where(z(j) > line + eps, j - 1, j)
+
+
+def lattice_particles(points: np.ndarray, soil: str, dx: float, h: float, origin, lo, hi
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, normal, foot), each (m, 2): boundary particles of one polyline on the soil's own
+    lattice (origin + (i + 1/2) dx, `lattice.lattice_axes`), for the columns within [lo,
+    hi] and the line's range. Per column (along x for a profile, along z for a wall) the
+    soil side starts at the first lattice row s_i on or beyond the line (`_soil_start`, the
+    layer's rule bottom(x) <= z); the boundary particles are the rows j < s_i (counted away
+    from the soil) within 2h of the soil of some column i' widened by dx/2 (where a plane
+    wall would lie), (i - i')^2 + max(s_i' - 1/2 - j, 0)^2 < (2h/dx)^2: as deep as the
+    mirror ghosts of a plane wall (3 rows for h = 1.3 dx). So the first boundary row is
+    exactly dx from the soil's lowest row in every column, whatever the line's dip (the
+    geometric rows of `boundary_particles` are (k + 1/2) dx below the line, dx/2 to 3dx/2
+    from that row), and a steep column is filled down to its neighbours' rows. Normal and
+    foot stay geometric: the nearest point of the line, with the segment's normal (the
+    radial direction where it is an inner vertex)."""
+    points = np.asarray(points, float)
+    axis = 0 if soil in ("above", "below") else 1  # the line is a function of this axis
+    up = 1 - axis
+    sign = 1 if soil in ("above", "right") else -1
+    eps = 1e-9 * max(np.ptp(points, axis=0).max(), 1.0)
+    a0, b0 = float(origin[axis]), float(origin[up])
+    i0 = int(math.ceil((max(points[0, axis], lo[axis]) - a0) / dx - 0.5))
+    i1 = int(math.floor((min(points[-1, axis], hi[axis]) - a0) / dx - 0.5))
+    cols = np.arange(i0, i1 + 1, dtype=np.int64)
+    c = a0 + (cols + 0.5) * dx
+    line = np.interp(c, points[:, axis], points[:, up])
+    s = _soil_start(line, b0, dx, eps, sign)
+    reach = int(math.ceil(2.0 * h / dx))
+    q2 = (2.0 * h / dx) ** 2
+    n = len(cols)
+    pad = np.concatenate([np.full(reach, s.max()), s, np.full(reach, s.max())])
+    deepest = np.min([pad[o:o + n] for o in range(2 * reach + 1)], axis=0) - reach
+    depth = s - deepest  # rows deepest .. s - 1 of each column
+    k = np.repeat(np.arange(n), depth)
+    j = deepest[k] + np.arange(len(k)) - np.repeat(np.cumsum(depth) - depth, depth)
+    keep = np.zeros(len(k), bool)
+    for o in range(-reach, reach + 1):
+        kk = k + o
+        ok = (kk >= 0) & (kk < n)
+        gap = np.maximum(s[np.clip(kk, 0, n - 1)] - j - 0.5, 0.0)
+        keep |= ok & (o * o + gap * gap < q2)
+    k, j = k[keep], j[keep]
+    x = np.empty((len(k), 2))
+    x[:, axis] = c[k]
+    x[:, up] = b0 + (sign * j + 0.5) * dx
+    normal, foot = _nearest_normals(x, points, soil, np.abs(x[:, up] - line[k]))
+    return x, normal, foot
+
+
+def _nearest_normals(x: np.ndarray, points: np.ndarray, soil: str, reach: np.ndarray,
+                     chunk: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+    """(normal, foot) of points x on the boundary side: the nearest point of the polyline
+    (no farther than `reach`, each point's distance to the line along its column) and the
+    normal into the soil there: the segment's, or (x -> foot) at an inner vertex."""
+    normals = soil_normals(points, soil)
+    nseg = len(points) - 1
+    normal, foot = np.empty_like(x), np.empty_like(x)
+    seg_lo = np.minimum(points[:-1], points[1:])
+    seg_hi = np.maximum(points[:-1], points[1:])
+    for a in range(0, len(x), chunk):
+        q = x[a:a + chunk]
+        r = reach[a:a + chunk].max() + 1e-9
+        near = np.flatnonzero(np.all((seg_hi >= q.min(axis=0) - r)
+                                     & (seg_lo <= q.max(axis=0) + r), axis=1))
+        seg, t, dist = _nearest_on_polyline(q, points, near)
+        seg = near[seg]
+        f = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
+        nrm = normals[seg].copy()
+        vertex = (((t <= 0.0) & (seg > 0)) | ((t >= 1.0) & (seg < nseg - 1))) & (dist > 0.0)
+        nrm[vertex] = (f[vertex] - q[vertex]) / dist[vertex, None]
+        normal[a:a + chunk], foot[a:a + chunk] = nrm, f
+    return normal, foot
