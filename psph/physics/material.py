@@ -5,6 +5,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psph.kernels.update import (
+    MAT_BULK3,
+    MAT_C_K,
+    MAT_COLUMNS,
+    MAT_DP,
+    MAT_K,
+    MAT_LAM,
+    MAT_N_MIN,
+    MAT_PLASTIC,
+    MAT_RHO_S,
+    MAT_SHEAR,
+)
+
 
 @dataclass(frozen=True)
 class ElasticSoil:
@@ -76,19 +89,6 @@ def material_table(scene) -> np.ndarray:
     C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
     (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19). The values are the same
     floats as the scalars the kernels took before several materials (issue 16)."""
-    from psph.kernels.update import (
-        MAT_BULK3,
-        MAT_C_K,
-        MAT_COLUMNS,
-        MAT_DP,
-        MAT_K,
-        MAT_LAM,
-        MAT_N_MIN,
-        MAT_PLASTIC,
-        MAT_RHO_S,
-        MAT_SHEAR,
-    )
-
     mats = scene.material_list
     table = np.zeros((len(mats), MAT_COLUMNS))
     for i, m in enumerate(mats):
@@ -126,19 +126,6 @@ def material_row(lam: float = 0.0, shear: float = 0.0, rho_s: float = 0.0, k: fl
     """A one-material table (1, MAT_COLUMNS) from constants, for kernels called outside a
     run (the element tests, unit tests); dp: the 7 Drucker-Prager parameters or None
     (elastic); bulk3 default 3 lambda + 2 mu."""
-    from psph.kernels.update import (
-        MAT_BULK3,
-        MAT_C_K,
-        MAT_COLUMNS,
-        MAT_DP,
-        MAT_K,
-        MAT_LAM,
-        MAT_N_MIN,
-        MAT_PLASTIC,
-        MAT_RHO_S,
-        MAT_SHEAR,
-    )
-
     row = np.zeros((1, MAT_COLUMNS))
     row[0, [MAT_LAM, MAT_SHEAR, MAT_RHO_S, MAT_K, MAT_C_K, MAT_N_MIN]] = \
         (lam, shear, rho_s, k, c_k, n_min)
