@@ -14,11 +14,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import ListedColormap  # noqa: E402
 
 from psph.errors import SceneError  # noqa: E402
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
-from psph.scenes.profiles import read_profile  # noqa: E402
+from psph.scene_boundaries import points_of  # noqa: E402
 from psph.verify import terzaghi  # noqa: E402
 from psph.verify.pressure import excess_pressure  # noqa: E402
 
@@ -72,12 +73,13 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
                              figsize=(width, 0.6 + shape[0] * (width * aspect * stretch * 1.25
                                                                + (0.3 if stretch > 1 else 0))))
     names = [m.name for m in scene.materials]
+    lines = [points_of(line) for line in scene.boundaries.polylines]
     for r, f in enumerate(frames):
         fields = [("eps_p", np.log10(f["eps_p"] + 1e-4), "log10 eps_p", (-4, 1), "viridis")]
         if r == 0 and len(names) > 1 and "material" in f:  # the layers, before they move
             fields[0] = ("material", f["material"], "material " + ", ".join(
                 f"{k} {n}" for k, n in enumerate(names)), (-0.5, len(names) - 0.5),
-                         matplotlib.colors.ListedColormap(plt.get_cmap("tab10").colors[:len(names)]))
+                         ListedColormap(plt.get_cmap("tab10").colors[:len(names)]))
         if coupled:
             mean = -(f["stress"][:, 0] + f["stress"][:, 1] + f["stress"][:, 2]) / 3e3
             # excess over the hydrostatic p of the water table at the current position,
@@ -94,9 +96,7 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
             ax = axes[r * cols + c, 0] if wide else axes[r, c]
             sc = ax.scatter(f["x"][:, 0], f["x"][:, 1], c=val, s=1.5, cmap=cmap, vmin=vmin,
                             vmax=vmax)
-            for line in scene.boundaries.polylines:  # the rigid boundaries (bedrock)
-                pts = read_profile(line.points, axis=0 if line.soil in ("above", "below")
-                                   else 1)
+            for pts in lines:  # the rigid boundaries (bedrock)
                 ax.plot(pts[:, 0], pts[:, 1], "k-", lw=0.8)
             ax.set_xlim(lo[0], hi[0])
             ax.set_ylim(lo[1], hi[1])

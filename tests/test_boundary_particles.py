@@ -383,3 +383,21 @@ def test_a_saturated_layer_at_rest_on_a_dipping_polyline_keeps_its_pressure(tmp_
         base = inner & (x0[:, 1] - np.interp(x0[:, 0], [-1.0, 41.0], [2.0349, 0.5676]) < 0.75)
         assert np.abs(ex[inner]).max() < 25e3, (s["time"], ex[inner].min(), ex[inner].max())
         assert np.ptp(ex[base]) < 20e3, (s["time"], ex[base].min(), ex[base].max())
+
+
+def test_a_line_sampled_finer_than_dx_gets_no_more_boundary_particles():
+    """A survey line with points closer than dx: the stations are spaced about dx along
+    the whole line (3 rows x 20 stations for 10 m at dx 0.5, as one segment or 100), and
+    a bend sampled at 201 points gets what its 3-point form gets."""
+    from psph.scenes.polylines import boundary_particles
+
+    counts = set()
+    for nseg in (1, 10, 100):
+        x = np.linspace(0.0, 10.0, nseg + 1)
+        counts.add(len(boundary_particles(np.c_[x, 0.1 * x], "above", 0.5, 0.65)[0]))
+    assert counts == {60}
+    t = np.linspace(0.0, 10.0, 201)
+    fine = np.c_[t, np.where(t < 5.0, 0.0, -(t - 5.0) * 0.5)]
+    coarse = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, -2.5]])
+    assert len(boundary_particles(fine, "above", 0.5, 0.65)[0]) == \
+        len(boundary_particles(coarse, "above", 0.5, 0.65)[0])

@@ -70,3 +70,35 @@ def test_shares_on_two_ranks_give_the_serial_metrics():
     assert need <= {tuple(p) for p in xs}
     cb = checkerboard_index(xs, fs["f"], h, None, None, comm, n_owned)
     assert cb == pytest.approx(checkerboard_index(x, f, h), rel=1e-12)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_collapse_verification_on_two_ranks_equals_one_process(tmp_path_factory):
+    """The whole end-of-run block of a saturated collapse (psph.verify.collapse_verification:
+    collapse metrics, slides, every snapshot's pressure quality) read in shares on 2 ranks
+    equals the one-process block: exactly, but the checkerboard indices (their sums in
+    another order) to a relative 1e-12."""
+    from psph.run import run
+    from psph.scene import load_scene
+    from psph.verify import collapse_verification
+    from tests.helpers import shared_tmp
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    scene = load_scene("collapse_saturated_psi0", ["time.end=0.01", "output.interval=0.005"])
+    if comm.Get_rank() == 0:
+        run(scene, out, comm=MPI.COMM_SELF, quiet=True)
+    comm.Barrier()
+    two = collapse_verification(out / "particles.h5", scene, comm)
+    if comm.Get_rank() == 0:
+        one = collapse_verification(out / "particles.h5", scene, MPI.COMM_SELF)
+        assert two["collapse"] == one["collapse"]
+        a, b = one["pressure_quality"]["series"], two["pressure_quality"]["series"]
+        assert a.keys() == b.keys() and len(a["time_s"]) == 3
+        for key in a:
+            if key.startswith("checkerboard"):  # None where no particle is debris
+                assert [v is None for v in b[key]] == [v is None for v in a[key]], key
+                assert [v for v in b[key] if v is not None] == pytest.approx(
+                    [v for v in a[key] if v is not None], rel=1e-12), key
+            else:
+                assert b[key] == a[key], key

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from psph.io.snapshots import read_snapshots
-from psph.physics.initial import initial_particles, soil_materials
+from psph.physics.initial import initial_particles
 from psph.run import make_slabs, run
 from psph.scene import load_scene
 
@@ -95,7 +95,6 @@ def test_sources_take_their_material_and_fluid_constants(tmp_path):
     d = initial_particles(scene)
     y = d["x"][:, 1]
     assert np.array_equal(d["material"], np.where(y > 1.0, 1.0, 0.0))
-    assert np.array_equal(soil_materials(scene), d["material"])
     assert np.allclose(d["rho"], np.where(y > 1.0, _mixture(LIGHT), _mixture(DENSE)))
     assert np.array_equal(d["poro"], np.where(y > 1.0, 0.5, 0.35))
     # the written scene keeps [[materials]] and no [material]
@@ -148,9 +147,9 @@ def test_layered_column_stays_at_its_overburden(tmp_path):
     base = np.max(np.abs(sv_ref))
     assert np.max(np.abs(s["v"])) < 1e-4
     err = np.abs(_row_pairs(s["stress"][:, 1], x0, y0) - _row_pairs(sv_ref, x0, y0))
-    assert np.max(err) < 0.02 * base
+    assert np.max(err) < 0.01 * base  # measured 0.7 %
     assert np.max(np.abs(s["stress"][:, 1] - sv_ref)) < 0.03 * base
-    assert np.max(np.abs(s["p"] - p_ref)) < 0.02 * np.max(p_ref)
+    assert np.max(np.abs(s["p"] - p_ref)) < 0.005 * np.max(p_ref)  # measured 0.14 %
     ratio = s["stress"][:, 0] / s["stress"][:, 1]
     assert np.all(np.abs(ratio - 0.5) < 0.02 * 0.5)
 

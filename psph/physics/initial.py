@@ -19,12 +19,6 @@ def soil_positions(scene) -> np.ndarray:
     return seed(scene)[0]
 
 
-def soil_materials(scene) -> np.ndarray:
-    """The material index of each particle of `soil_positions` (float64): its source's
-    `material`; a lattice point in several fill sources takes the last one's."""
-    return seed(scene, material=True)[2]
-
-
 def material_arrays(scene, material: np.ndarray) -> dict[str, np.ndarray]:
     """Per-particle porosity, grain density and conductivity of each particle's material
     (index array `material`): the values of its row (with one material, the scene's

@@ -56,11 +56,18 @@ def boundary_particles(points: np.ndarray, soil: str, dx: float, h: float
     normals = soil_normals(points, soil)
     xs, ns, fs = [], [], []
     tol = 1e-9 * dx
+    # stations at an even spacing of about dx along the whole line, whatever its points'
+    # spacing (a survey line sampled finer than dx gets no more particles)
+    seg_len = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    cum = np.concatenate(([0.0], np.cumsum(seg_len)))
+    m = max(1, int(round(cum[-1] / dx)))
+    station = (np.arange(m) + 0.5) * (cum[-1] / m)
+    on = np.clip(np.searchsorted(cum, station, side="right") - 1, 0, len(seg_len) - 1)
     for j in range(len(points) - 1):
         a, b = points[j], points[j + 1]
-        length = float(np.linalg.norm(b - a))
-        m = max(1, int(round(length / dx)))
-        s = (np.arange(m) + 0.5) / m
+        s = (station[on == j] - cum[j]) / seg_len[j]
+        if len(s) == 0:
+            continue
         foot = a[None] + s[:, None] * (b - a)[None]
         # only segments that come within the rows' reach of this one can be nearer
         reach = (nrows + 1) * dx
@@ -86,7 +93,9 @@ def boundary_particles(points: np.ndarray, soil: str, dx: float, h: float
             continue  # the corner opens toward the soil: the rows overlap, trimmed above
         for k in range(nrows):
             r = (k + 0.5) * dx
-            m = max(1, int(round(abs(sweep) * r / dx)))
+            m = int(round(abs(sweep) * r / dx))
+            if m == 0:  # a gap narrower than dx / 2: no particle
+                continue
             ang = a0 + sweep * (np.arange(m) + 0.5) / m
             radial = np.stack([np.cos(ang), np.sin(ang)], axis=1)
             xs.append(points[j][None] + r * radial)

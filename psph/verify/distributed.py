@@ -70,7 +70,7 @@ def with_halo(x: np.ndarray, fields: dict[str, np.ndarray], reach: float, comm
     left = (owner > 0) & (x[:, 0] < cuts[owner] + reach)
     right = (owner < size - 1) & (x[:, 0] >= cuts[owner + 1] - reach)
     names = list(fields)
-    cols = [x] + [fields[k].reshape(len(x), -1) for k in names]
+    cols = [x] + [fields[k].reshape(len(x), int(np.prod(fields[k].shape[1:]))) for k in names]
     widths = [c.shape[1] for c in cols]
     table = np.hstack(cols + [np.zeros((len(x), 1))])  # last column: 1 on a halo copy
     dest = np.concatenate([owner, owner[left] - 1, owner[right] + 1])
