@@ -167,8 +167,8 @@ def test_list_names_builtin_scenes():
     names = [line.split()[0] for line in r.stdout.splitlines()]
     assert names == ["collapse_dry", "collapse_saturated_psi-5", "collapse_saturated_psi0",
                      "collapse_saturated_psi2.5", "geostatic_column", "harmonic",
-                     "retrogressive_k0_0.5", "retrogressive_k0_1.5", "strip_footing",
-                     "terzaghi", "terzaghi_undrained"]
+                     "retrogressive_k0_0.5", "retrogressive_k0_1.5", "slope_section",
+                     "strip_footing", "terzaghi", "terzaghi_undrained"]
 
 
 def test_set_override_reaches_resolved_scene(tmp_path):
