@@ -4,6 +4,7 @@
 
     python bench/memory.py            # dx 0.004, 0.0028, 0.002 (0.5M, 1M, 2M particles)
     python bench/memory.py --quick    # dx 0.01, 0.007 on 1 and 2 ranks (a minute)
+    python bench/memory.py --dx 0.0009   # 9.9M particles on 1, 2, 4 ranks (5 min, 6.4 GB)
     python bench/memory.py --plot-only
 
 Each case is one `mpirun -n R python -m psph run collapse_dry --set particles.dx=DX` with
@@ -65,7 +66,7 @@ def table(rows: list[dict]) -> None:
               f"{r['state_bytes_per_owned_particle']:16.0f} {r['setup_s']:9.1f}")
 
 
-def plot(rows: list[dict]) -> Path:
+def plot(rows: list[dict], name: str = "memory") -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -86,7 +87,7 @@ def plot(rows: list[dict]) -> Path:
         a.legend()
     fig.suptitle(f"bench/memory.py, dry collapse, {date.today()}, {platform.node()}")
     fig.tight_layout()
-    path = OUT / "memory.png"
+    path = OUT / f"{name}.png"
     fig.savefig(path, dpi=110)
     return path
 
@@ -95,18 +96,22 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--dx", type=float, nargs="+", help="particle spacings instead of the "
+                    "full set (on 1, 2 and 4 ranks)")
     args = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
-    path = OUT / ("memory-quick.json" if args.quick else "memory.json")
+    path = OUT / ("memory-quick.json" if args.quick else
+                  f"memory-dx{'_'.join(map(str, args.dx))}.json" if args.dx else "memory.json")
     if args.plot_only:
         rows = json.loads(path.read_text())["rows"]
     else:
-        cases = QUICK if args.quick else FULL
+        cases = QUICK if args.quick else {"dx": tuple(args.dx), "ranks": FULL["ranks"]} \
+            if args.dx else FULL
         rows = [run_case(dx, r) for dx in cases["dx"] for r in cases["ranks"]]
         path.write_text(json.dumps({"date": str(date.today()), "machine": platform.node(),
                                     "cpus": os.cpu_count(), "rows": rows}, indent=1) + "\n")
     table(rows)
-    print(f"wrote {path} and {plot(rows)}")
+    print(f"wrote {path} and {plot(rows, path.stem)}")
     return 0
 
 
