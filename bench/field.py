@@ -9,9 +9,10 @@
 Prints a table (wall time, steps, particle-steps per second per core for the
 elastoplastic coupled step over the whole run and over its time steps alone ("stepping":
 the stages' seconds, without set-up, gravity loading, snapshots and end-of-run metrics),
-the wall time the full 40 s take at that rate, and the time share of each stage) and writes bench/out/field.json (one entry per scene and window)
-and bench/out/field.png. The bar of issue 5: the full 40 s of retrogressive_k0_0.5 in
-under 30 minutes of wall time on 2 ranks.
+the wall time the full 40 s take at that rate, and the time share of each stage) and
+writes bench/out/field.json (one entry per scene and window) and bench/out/field.png.
+The bar of issue 5: the full 40 s of retrogressive_k0_0.5 in under 30 minutes of wall
+time on 2 ranks.
 """
 
 import argparse
