@@ -38,7 +38,8 @@ class PressureSolve:
         if a.get("cap", 0) < cap:
             a.update(cap=cap, storage=np.zeros(cap), rhs=np.zeros(cap), diag=np.zeros(cap),
                      dp=np.zeros((cap, 1)), imposed=np.zeros((cap, 2)),
-                     fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)))
+                     fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)),
+                     acc=np.zeros((cap, 2)))
         if "w" not in a or a["w"].shape[0] < n_pairs:
             m = max(n_pairs, self.sim.pairs.shape[0])
             a.update(w=np.zeros(m), w_diag=np.zeros(m), w_off=np.zeros(m))
@@ -126,8 +127,9 @@ class PressureSolve:
 
     def project(self) -> None:
         """p^(n+1) = p^n + dp from one solve of Eq. (29) (module `psph.kernels.projection`),
-        and the velocity correction of dp on the owned rows. Collective (the solve's
-        reductions and halo refreshes)."""
+        and the velocity correction of dp on the owned rows: of the kicked v* in the
+        symplectic step, of v^n in the one-sweep step (`time.integrator = "euler"`, whose
+        update kicks after). Collective (the solve's reductions and halo refreshes)."""
         sim = self.sim
         st = sim.store
         n, npairs = st.n_owned, sim.n_pairs
@@ -174,8 +176,19 @@ class PressureSolve:
         sv["iterations_max"] = max(sv["iterations_max"], res.iterations)
         sv["not_converged"] += not res.converged
         self.refresh_rows(dp, signed=True)
+        # after the kick (symplectic step) the correction completes a^n in st.acc; in the
+        # one-sweep step `advance` writes a^n there after this, so it is kept aside
+        # (`correction_acceleration`) and added back by the update
+        acc = st.acc
+        if not sim.symplectic:
+            acc = a["acc"]
+            acc[:n] = 0.0
         pressure_correction(n, npairs, sim.pairs, sim.pair_g, st.vol, st.rho, d, dt,
-                            sim.lattice_norm, a["dv"], st.v, st.acc)
+                            sim.lattice_norm, a["dv"], st.v, acc)
         st.p_prev[:n] = st.p[:n]
         st.p[:n] += d[:n]
 
+    def correction_acceleration(self) -> np.ndarray:
+        """The velocity correction's acceleration of the owned rows of this step (the
+        one-sweep step: `Simulation._update` adds it to the a^n that `advance` records)."""
+        return self._a["acc"][:self.sim.store.n_owned]

@@ -332,9 +332,6 @@ class Scene(_Model):
                 if not lo[d] <= pt[d] <= hi[d]:
                     raise _Rule(f"output.probes.{name}", pt,
                                 f"probe outside the domain [{lo}, {hi}]")
-        if self.pressure.scheme == "projection" and self.time.integrator != "symplectic":
-            raise _Rule("pressure.scheme", "projection",
-                        "needs time.integrator = 'symplectic' (the solve follows the kick)")
         if self.pressure.scheme == "projection" and self.boundaries.polylines:
             raise _Rule("pressure.scheme", "projection", "not yet with boundaries.polylines")
         if self.pressure.momentum != "pair" and self.pressure.scheme not in ("explicit", "tpi"):

@@ -432,6 +432,8 @@ class Simulation:
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
+        if self.scheme == SCHEME_PROJECTION and not self.symplectic:
+            st.acc[:st.n_owned] += self.pressure_solve.correction_acceleration()
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
@@ -462,8 +464,11 @@ class Simulation:
     def _project(self) -> None:
         """The pressure increment of the step from one solve of Eq. (29) with its velocity
         correction (`PressureSolve.project`), then the halo and ghost copies and the
-        velocity sums of the corrected velocity. Collective. Skipped while another scheme
-        is in force (the gravity loading of `equilibrate` holds p hydrostatic)."""
+        velocity sums of the corrected velocity. After the kick (symplectic step) or, in
+        the one-sweep step, of v^n from the step's sweep; the update then kicks with a^n
+        (README "The projection without the symplectic step"). Collective. Skipped while
+        another scheme is in force (the gravity loading of `equilibrate` holds p
+        hydrostatic)."""
         if self.scheme != SCHEME_PROJECTION:
             return
         self.pressure_solve.project()

@@ -10,6 +10,13 @@ where the dt / rho part is the divergence of the velocity correction
 v^(n+1) = v* - (dt / rho) grad dp (an approximate projection: the operator is the SPH
 Laplacian of `laplacian.py`, the correction the pair-symmetric gradient of Eq. 26).
 The right-hand side is the explicit rate of Eq. (25) times n / K_l.
+
+The one-sweep step (`time.integrator = "euler"`) takes v* = v^n, the velocity of the
+step's sweep, corrects it, and kicks with a^n after: v^(n+1) = v^n - (dt / rho) grad dp +
+dt a^n. For the undrained wave (rho dv/dt = -dp/dx, dp/dt = -K dv/dx, a = (c k dt)^2)
+its amplification matrix on (v, dt k p / rho) is [[1/(1+a), -1], [a/(1+a), 1]]: determinant
+1, trace 1 + 1/(1+a) < 2, so |lambda| = 1 at any dt: stable and undamped. With the kick
+first it is [[1, -1], [a, 1]] / (1+a), |lambda|^2 = 1 / (1+a): stable and damped.
 """
 
 import numba as nb
