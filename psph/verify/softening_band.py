@@ -34,7 +34,7 @@ from dataclasses import dataclass, replace
 import numba as nb
 import numpy as np
 
-from psph.kernels.neighbours import cell_lists
+from psph.kernels.neighbours import cell_lists_indexed
 from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
 from psph.kernels.plasticity import dp_constants, dp_return
 
@@ -43,7 +43,7 @@ from psph.kernels.plasticity import dp_constants, dp_return
 class BandParams:
     """Layer, material (Pa, kg/m^3, m) and loading."""
 
-    height: float = 0.4  # H (m)
+    height: float = 0.3  # H (m)
     E: float = 26e6
     nu: float = 0.3
     rho: float = 2000.0
@@ -52,10 +52,10 @@ class BandParams:
     eta: float = 20.0  # softening rate of Eq. (18), c_r = 0
     dip: float = 0.01  # relative cohesion dip at mid-height
     dip_width: float = 0.02  # its Gaussian width (m)
-    speed: float = 0.02  # top velocity (m/s)
-    slip: float = 0.03  # top displacement at the end (m)
+    speed: float = 0.05  # top velocity (m/s)
+    slip: float = 0.025  # top displacement at the end (m)
     damping: float = 20.0  # c_d (1/s)
-    courant: float = 0.5  # dt = courant dy / c_s
+    courant: float = 0.8  # dt = courant dy / c_s
 
 
 @dataclass(frozen=True)
@@ -129,12 +129,8 @@ def softening_band(dy: float, length: float = 0.0, weight: float = 2.0,
     y = (np.arange(n) + 0.5) * dy
     x = np.concatenate([np.column_stack([np.full(n, c * dy), y]) for c in cols])
     h = max(length, dy)
-    cell_start, order, ncell = cell_lists(x, h)
+    cell_of, cell_start, order, ncell = cell_lists_indexed(x, h)
     cs = 2 * h
-    origin = x.min(axis=0) - 4 * cs
-    ij = np.floor((x - origin) / cs).astype(np.int64)
-    lo = ij.min(axis=0) - 1
-    cell_of = (ij[:, 1] - lo[1]) * ncell[0] + (ij[:, 0] - lo[0])
     state = np.zeros((n + 1, 5))
     g_d, peak = _run(n, dy, steps, dt, par.speed, par.rho, par.damping, bulk, shear,
                      par.sigma0, par.c_p, par.dip, par.dip_width, par.eta, length, weight, x,
@@ -148,8 +144,8 @@ def softening_band(dy: float, length: float = 0.0, weight: float = 2.0,
 def main(argv: list[str] | None = None) -> int:
     print(f"{'l_c (m)':>8s} {'m':>4s} {'dy (m)':>8s} {'G_d (J/m2)':>11s} {'band (m)':>9s}"
           f" {'peak tau':>9s} {'end tau':>8s}")
-    for length, weight in ((0.0, 1.0), (0.04, 1.0), (0.04, 2.0)):
-        for dy in (0.01, 0.005):
+    for length, weight in ((0.0, 1.0), (0.03, 1.0), (0.03, 2.0), (0.06, 2.0)):
+        for dy in (0.01, 0.01 / 1.5):
             r = softening_band(dy, length, weight)
             print(f"{length:8.3f} {weight:4.1f} {dy:8.4f} {r.dissipated:11.2f}"
                   f" {r.band_width:9.4f} {r.peak_tau:9.0f} {r.final_tau:8.0f}")
