@@ -37,9 +37,18 @@ def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, 
     in key order in a cell); rings: cells to search on each side, >= 2 max l_c / (2h).
     Each sum visits the cells row by row in the global numbering and a cell in key
     order: the same particles in the same order on any number of ranks (bitwise 1 vs N,
-    with a halo of at least 2 l_c)."""
+    with a halo of at least 2 l_c). Before anything yields the sums are skipped."""
     ncx = ncell[0]
     ncy = ncell[1]
+    plastic = False
+    for j in range(n_real):
+        if eps_p[j] != 0.0:
+            plastic = True
+            break
+    if not plastic:  # nothing has yielded on this rank or its halo: every average is 0
+        for i in range(n_owned):
+            out[i] = eps_p[i]
+        return
     for i in range(n_owned):
         k = int(material[i])
         lc = lengths[k]
