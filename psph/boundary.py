@@ -32,14 +32,16 @@ from psph.kernels.boundary import (
 from psph.scene import Scene
 from psph.scene_boundaries import points_of
 from psph.scenes.polylines import boundary_particles, lattice_particles
+from psph.softening import reach
 
 _MOTION = {"fixed": MOTION_FIXED, "slip": MOTION_SLIP, "friction": MOTION_FRICTION}
 
 
 def halo_width(scene: Scene) -> float:
     """Halo depth and minimum inner slab width: 2h, or 4h with polyline boundaries (their
-    Shepard averages reach 2h beyond the 2h of the pair loop)."""
-    return (4.0 if scene.boundaries.polylines else 2.0) * scene.h
+    Shepard averages reach 2h beyond the 2h of the pair loop), or the support 2 l_c of a
+    regularised softening if wider (psph/softening.py)."""
+    return max((4.0 if scene.boundaries.polylines else 2.0) * scene.h, reach(scene))
 
 
 class PolylineBoundaries:

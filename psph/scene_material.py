@@ -19,6 +19,18 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, validate_default=True)
 
 
+class Regularisation(_Model):
+    """Regularised (mesh-objective) softening (issue 17): Eq. (17)-(19) driven by the
+    over-non-local equivalent plastic strain eps_hat = (1 - m) eps_p + m eps_bar, eps_bar
+    the average of eps_p with the cubic spline of smoothing length `length` (support
+    2 length; psph/kernels/nonlocal_strain.py). `length` is the internal length l_c in
+    metres, a material property independent of dx; m = 1: the plain average."""
+
+    kind: Literal["nonlocal"]
+    length: Annotated[float, Field(gt=0.0)]  # l_c (m)
+    m: Annotated[float, Field(ge=1.0)] = 2.0  # over-non-local weight
+
+
 class Plasticity(_Model):
     """Drucker-Prager strain softening, Eq. (14)-(19). Angles in degrees, cohesion in Pa;
     residual values default to the peak ones (no softening)."""
@@ -30,6 +42,7 @@ class Plasticity(_Model):
     psi: Annotated[float, Field(gt=-90.0, lt=90.0)] = 0.0  # initial dilation psi_0, Eq. (19)
     eta: Annotated[float, Field(ge=0.0)] = 0.0  # softening rate of phi and c, Eq. (17)-(18)
     s_f: Annotated[float, Field(ge=0.0)] = 0.0  # decay rate of dilation, Eq. (19)
+    regularisation: Regularisation | None = None  # None: the local law
 
 
 class Material(_Model):

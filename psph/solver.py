@@ -61,6 +61,7 @@ from psph.pressure_solve import PressureSolve
 from psph.scene import Scene
 from psph.scenes.geometry import inside_polygon
 from psph.scenes.lattice import extent, seed
+from psph.softening import nonlocal_softening
 from psph.stepping import TimeStepping, time_stepping  # noqa: F401  (re-exported)
 
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
@@ -141,6 +142,7 @@ class Simulation:
         margin = 2.0 * self.h
         self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
         self.cell_size = 2.0 * self.h
+        self.softening = nonlocal_softening(scene, self.cell_size)  # None: local softening
         self.origin = np.array(lo, float) - 4.0 * self.cell_size
         span = np.array(hi, float) - np.array(lo, float)
         self.cell_max = (np.ceil(span / self.cell_size) + 8).astype(np.int64)
@@ -235,6 +237,9 @@ class Simulation:
         if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
             pname = "explicit->tpi"
         model = ",drucker_prager" if self.plastic else ",elastic"
+        if self.softening:  # x as at the neighbour search: before shifting moves it
+            stages.append(Stage(self.softening.name(), lambda: self.softening.average(
+                self.store, self.cell_of, self.cell_start, self.order, self.ncell)))
         if self.shifting > 0.0:
             # before the update: the sweep's volumes, which the update changes on owned
             # rows only (halo copies keep them), so the sums stay partition-independent
@@ -428,7 +433,8 @@ class Simulation:
                       self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      st.eps_p, self.ponding, self.symplectic)
+                      st.eps_p, self.softening.eps_hat if self.softening else st.eps_p,
+                      self.ponding, self.symplectic)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

@@ -55,7 +55,7 @@ damping = 0.05
     return f
 
 
-def _one_vs_two(comm, scene, out: Path):
+def _one_vs_two(comm, scene, out: Path, extra: tuple[str, ...] = ()):
     from mpi4py import MPI
 
     if comm.Get_rank() == 0:
@@ -65,13 +65,13 @@ def _one_vs_two(comm, scene, out: Path):
     assert summary["ranks"] == 2
     problem = None
     if comm.Get_rank() == 0:
-        problem = _compare(out / "one" / "particles.h5", out / "two" / "particles.h5")
+        problem = _compare(out / "one" / "particles.h5", out / "two" / "particles.h5", extra)
     # every rank learns the verdict, so a failure cannot leave a rank waiting
     problem = comm.bcast(problem, root=0)
     assert problem is None, problem
 
 
-def _compare(path_one: Path, path_two: Path):
+def _compare(path_one: Path, path_two: Path, extra: tuple[str, ...] = ()):
     one = read_snapshots(path_one)
     two = read_snapshots(path_two)
     if [s["step"] for s in one] != [s["step"] for s in two]:
@@ -79,7 +79,7 @@ def _compare(path_one: Path, path_two: Path):
     for a, b in zip(one, two, strict=True):
         if not np.array_equal(a["id"], b["id"]):  # every particle exactly once
             return f"ids differ at step {a['step']}"
-        for field in ("x", "u", "v", "p", "n", "stress"):
+        for field in ("x", "u", "v", "p", "n", "stress", *extra):
             # tolerance: none. The neighbour order is partition independent.
             if not np.array_equal(a[field], b[field]):
                 diff = np.max(np.abs(a[field] - b[field]))
@@ -94,6 +94,35 @@ def test_consolidation_column_one_vs_two_ranks_bitwise(tmp_path_factory):
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
     _one_vs_two(comm, load_scene("terzaghi", COLUMN), out)
+
+
+# a small dry collapse (400 particles, 2896 steps) with the regularised softening of
+# issue 17: l_c = 0.1 m, its support 0.2 m wider than the 2h = 0.12 m of the pair loop, so
+# the halo follows 2 l_c; cut along y through the yielding face
+REGULARISED = ["domain.max=[3.0, 1.5]", "particles.blocks.0.max=[1.0, 1.0]",
+               "particles.dx=0.05", "time.end=0.2", "output.interval=0.1",
+               "material.plasticity.eta=50.0", "decomposition.axis='y'",
+               "material.plasticity.regularisation={kind='nonlocal', length=0.1}"]
+
+
+@pytest.mark.mpi(min_size=2)
+def test_regularised_softening_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """The non-local eps_p (psph/kernels/nonlocal_strain.py) sums the same particles in
+    the same order on 1 and 2 ranks; by 0.2 s 25 particles have yielded on both sides of
+    the cut (eps_p > 1e-3, y from 0.02 to 0.87 m; the cut is near y = 0.5 m). With the
+    halo left at 2h (not following 2 l_c) x differed by 1.4e-8 m at 0.1 s."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    _one_vs_two(comm, load_scene("collapse_dry", REGULARISED), out, extra=("eps_p",))
+    spread = None
+    if comm.Get_rank() == 0:
+        last = read_snapshots(out / "two" / "particles.h5")[-1]
+        y = last["x"][last["eps_p"] > 1e-3, 1]
+        spread = (float(y.min()), float(y.max())) if len(y) else (1.0, 0.0)
+    lo, hi = comm.bcast(spread, root=0)
+    assert lo < 0.3 and hi > 0.7
 
 
 @pytest.mark.mpi(min_size=2)

@@ -121,6 +121,12 @@ def cell_lists(x: np.ndarray, h: float,
     """(cell_start, order, ncell) of a whole particle set in one go, cells of side 2h
     (the pair sweeps' layout); for verification drivers and tests, not the time loop,
     which keeps its arrays. key: the sort key within a cell (default: the index)."""
+    return cell_lists_indexed(x, h, key)[1:]
+
+
+def cell_lists_indexed(x: np.ndarray, h: float, key: np.ndarray | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(cell_of, cell_start, order, ncell): `cell_lists` with each particle's cell."""
     n = len(x)
     key = np.arange(n, dtype=float) if key is None else key
     cs = 2 * h
@@ -129,8 +135,9 @@ def cell_lists(x: np.ndarray, h: float,
     ncell = np.zeros(2, np.int64)
     grid_bounds(x, n, origin, cs, np.array([1 << 40, 1 << 40], np.int64), lo, ncell)
     nc = int(ncell.prod())
+    cell_of = np.zeros(n, np.int64)
     cell_start = np.zeros(nc + 1, np.int64)
     order = np.zeros(n, np.int64)
-    bin_particles(x, key, n, origin, cs, lo, ncell, np.zeros(n, np.int64), cell_start,
+    bin_particles(x, key, n, origin, cs, lo, ncell, cell_of, cell_start,
                   np.zeros(nc + 1, np.int64), order)
-    return cell_start, order, ncell
+    return cell_of, cell_start, order, ncell

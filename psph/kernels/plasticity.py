@@ -7,6 +7,9 @@ Eq. (17)-(19) in the equivalent plastic strain. The return mapping is the semi-i
 one of Bui et al. (2008) (the paper's ref. [3]): one plastic corrector with the multiplier
 of Eq. (13), then the tension-cracking treatment at the apex and the scaling back of the
 deviator onto the surface, so that no state ends outside it and none is NaN.
+The strain that softens Eq. (17)-(19) is the particle's own eps_p (the local law) or, with
+`plasticity.regularisation`, the over-non-local strain of `nonlocal_strain.py` (issue 17);
+`dp_return` returns the local increment either way.
 """
 
 import math

@@ -29,7 +29,9 @@ MAT_C_K = 5  # C_k of Eq. (4); 0: constant k
 MAT_N_MIN = 6  # porosity floor of Eq. (24); 0: none
 MAT_PLASTIC = 7  # 1: Drucker-Prager, 0: elastic
 MAT_DP = 8  # 7 columns: phi_p, phi_r, c_p, c_r, psi_0, eta, s_f (Eq. 17-19, radians)
-MAT_COLUMNS = MAT_DP + 7
+MAT_NL_LENGTH = MAT_DP + 7  # l_c of the non-local softening strain (m); 0: local
+MAT_NL_M = MAT_DP + 8  # its over-non-local weight m (psph/kernels/nonlocal_strain.py)
+MAT_COLUMNS = MAT_DP + 9
 
 
 @nb.njit(cache=True, inline="always")
@@ -170,7 +172,7 @@ def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, 
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, mat, material,
             bulk_water, gamma_l, rho_l, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box, plastic, eps_p, ponding, kicked):
+            acc_term, correct_strain, box, plastic, eps_p, eps_soft, ponding, kicked):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
@@ -184,7 +186,9 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     drained_from <= t.
     plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
     whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
-    psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain.
+    psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
+    the softening of Eq. (17)-(19) takes eps_soft[i]: eps_p itself (the local law) or the
+    regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17).
     ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
     hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
     kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
@@ -238,7 +242,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
         if plastic and row[MAT_PLASTIC] > 0.0:
             d = MAT_DP
-            r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_p[i],
+            r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_soft[i],
                           lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1], row[d + 2],
                           row[d + 3], row[d + 4], row[d + 5], row[d + 6])
             stress[i, 0] = r[0]

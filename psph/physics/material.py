@@ -13,6 +13,8 @@ from psph.kernels.update import (
     MAT_K,
     MAT_LAM,
     MAT_N_MIN,
+    MAT_NL_LENGTH,
+    MAT_NL_M,
     MAT_PLASTIC,
     MAT_RHO_S,
     MAT_SHEAR,
@@ -87,7 +89,8 @@ def material_table(scene) -> np.ndarray:
     particle field `material`, in the column layout of psph/kernels/update.py (MAT_*):
     Lame constants and 3K = 3 lambda + 2 mu (Eq. 11), rho_s (Eq. 24 with Eq. 8), k and
     C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
-    (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19). The values are the same
+    (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19), with l_c and m of its
+    non-local softening strain (0: local; issue 17). The values are the same
     floats as the scalars the kernels took before several materials (issue 16)."""
     mats = scene.material_list
     table = np.zeros((len(mats), MAT_COLUMNS))
@@ -102,6 +105,10 @@ def material_table(scene) -> np.ndarray:
         table[i, MAT_N_MIN] = m.porosity_min
         table[i, MAT_PLASTIC] = 1.0 if m.model == "drucker_prager" else 0.0
         table[i, MAT_DP:MAT_DP + 7] = plasticity_parameters(scene, m)
+        reg = m.plasticity.regularisation if m.plasticity is not None else None
+        if reg is not None:
+            table[i, MAT_NL_LENGTH] = reg.length
+            table[i, MAT_NL_M] = reg.m
     return table
 
 

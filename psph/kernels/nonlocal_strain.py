@@ -1,0 +1,86 @@
+"""Non-local (integral-averaged) equivalent plastic strain for the softening laws of
+Eq. (17)-(19) (issue 17, item 1: `material.plasticity.regularisation`).
+
+With a local softening law the plastic strain of a shear band concentrates in one row of
+particles, so the energy the band dissipates scales with dx. Here the softening of
+Eq. (17)-(19) is driven by the over-non-local strain (Vermeer & Brinkgreve 1994;
+Brinkgreve 1994; Galavi & Schweiger 2010)
+
+    eps_hat_i = (1 - m) eps_i + m eps_bar_i,
+    eps_bar_i = sum_j V_j W(r_ij, l_c) eps_j / sum_j V_j W(r_ij, l_c),
+
+W the cubic spline of Eq. (21) with smoothing length l_c (support 2 l_c), the internal
+length of the material in metres, independent of dx; the sum runs over the real particles
+(owned and halo; not wall ghosts or boundary particles) of the same material within
+2 l_c, i included. The weights are sum-normalised, so a constant field is reproduced
+exactly; they are symmetric, so a linear field is reproduced where the support is full.
+m >= 1: m = 1 the plain non-local average; m > 1 weights the average above the local
+value, which keeps the band at a width set by l_c (Jirasek & Rolshoven 2003).
+eps_hat is clipped at 0 (no strength above the peak). The local eps_p still accumulates
+the return mapping's increments (`update.advance`).
+"""
+
+import math
+
+import numba as nb
+
+from psph.kernels.spline import w_cubic
+
+
+@nb.njit(cache=True)
+def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
+                    cell_start, order, ncell, rings, out):
+    """out[i] = eps_hat_i of particles 0..n_owned-1 (module docstring).
+
+    lengths[k], weights[k]: l_c (m) and m of material k (l_c = 0: local, out = eps_p);
+    cell_of, cell_start, order, ncell: the step's cell lists (cells of side 2h, particles
+    in key order in a cell); rings: cells to search on each side, >= 2 max l_c / (2h).
+    Each sum visits the cells row by row in the global numbering and a cell in key
+    order: the same particles in the same order on any number of ranks (bitwise 1 vs N,
+    with a halo of at least 2 l_c). Before anything yields the sums are skipped."""
+    ncx = ncell[0]
+    ncy = ncell[1]
+    plastic = False
+    for j in range(n_real):
+        if eps_p[j] != 0.0:
+            plastic = True
+            break
+    if not plastic:  # nothing has yielded on this rank or its halo: every average is 0
+        for i in range(n_owned):
+            out[i] = eps_p[i]
+        return
+    for i in range(n_owned):
+        k = int(material[i])
+        lc = lengths[k]
+        if not lc > 0.0:
+            out[i] = eps_p[i]
+            continue
+        support2 = 4.0 * lc * lc
+        c = cell_of[i]
+        cx = c % ncx
+        cy = c // ncx
+        num = 0.0
+        den = 0.0
+        for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
+            for nx in range(max(cx - rings, 0), min(cx + rings + 1, ncx)):
+                nc = ny * ncx + nx
+                for s in range(cell_start[nc], cell_start[nc + 1]):
+                    j = order[s]
+                    if j >= n_real or int(material[j]) != k:
+                        continue
+                    d0 = x[j, 0] - x[i, 0]
+                    d1 = x[j, 1] - x[i, 1]
+                    r2 = d0 * d0 + d1 * d1
+                    if r2 >= support2:
+                        continue
+                    w = vol[j] * w_cubic(math.sqrt(r2), lc)
+                    num += w * eps_p[j]
+                    den += w
+        m = weights[k]
+        e = (1.0 - m) * eps_p[i] + m * (num / den)
+        out[i] = e if e > 0.0 else 0.0
+
+
+def rings_for(length: float, cell_size: float) -> int:
+    """Cells to search on each side for a support of 2 l_c (at least 1)."""
+    return max(1, math.ceil(2.0 * length / cell_size))

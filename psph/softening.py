@@ -1,0 +1,55 @@
+"""The regularised softening stage (issue 17, item 1): the over-non-local equivalent
+plastic strain that drives Eq. (17)-(19) for the materials with
+`plasticity.regularisation` (psph/kernels/nonlocal_strain.py); the other materials keep
+the local law. The averaging reads eps_p of the halo rows, which `exchange` sends with
+the full state: the halo is at least 2 l_c deep (`reach`, taken by `boundary.halo_width`),
+so every owned particle's support is on its rank."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
+
+
+def _regularisations(scene) -> list:
+    return [m.plasticity.regularisation if m.plasticity is not None else None
+            for m in scene.material_list]
+
+
+def reach(scene) -> float:
+    """Support radius 2 l_c of the widest regularisation (m); 0 without any."""
+    return max((2.0 * r.length for r in _regularisations(scene) if r is not None),
+               default=0.0)
+
+
+class NonlocalSoftening:
+    """l_c and m per material, and the step's eps_hat of the owned rows (`eps_hat`, grown
+    with the store, never per step)."""
+
+    def __init__(self, scene, cell_size: float):
+        regs = _regularisations(scene)
+        self.lengths = np.array([r.length if r is not None else 0.0 for r in regs])
+        self.weights = np.array([r.m if r is not None else 1.0 for r in regs])
+        self.rings = rings_for(float(self.lengths.max()), cell_size)
+        self.eps_hat = np.zeros(0)
+
+    def name(self) -> str:
+        lc = ", ".join(f"{v:g}" for v in self.lengths if v > 0.0)
+        return f"nonlocal_eps_p[l_c {lc} m]"
+
+    def average(self, store, cell_of: np.ndarray, cell_start: np.ndarray,
+                order: np.ndarray, ncell: np.ndarray) -> None:
+        """eps_hat of the owned rows from this step's cell lists (positions unchanged
+        since the neighbour search)."""
+        st = store
+        if self.eps_hat.shape[0] < st.cap:
+            self.eps_hat = np.zeros(st.cap)
+        nonlocal_strain(st.n_owned, st.n_real, st.x, st.vol, st.eps_p, st.material,
+                        self.lengths, self.weights, cell_of, cell_start, order, ncell,
+                        self.rings, self.eps_hat)
+
+
+def nonlocal_softening(scene, cell_size: float) -> NonlocalSoftening | None:
+    """The stage's state, or None when no material is regularised (the local law)."""
+    return NonlocalSoftening(scene, cell_size) if reach(scene) > 0.0 else None
