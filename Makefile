@@ -24,7 +24,7 @@ STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
 	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-field \
-	bench-field-window bench-large lint clean-env
+	bench-field-window bench-large bench-convergence bench-convergence-quick lint clean-env
 
 env: $(STAMP)
 
@@ -98,6 +98,14 @@ bench-field: env
 
 bench-field-window: env
 	$(VPY) bench/field.py --window 0.5
+
+# run-out against dx and dt, local and regularised softening (issue 17): the full matrix
+# (hours on 2 cores; ARGS="--only REGEX" for a subset) or the CI-sized dry column (~3 min)
+bench-convergence: env
+	$(VPY) bench/convergence.py $(ARGS)
+
+bench-convergence-quick: env
+	$(VPY) bench/convergence.py --quick
 
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env

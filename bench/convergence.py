@@ -1,0 +1,269 @@
+"""Convergence of the landslide answers (issue 17, item 3): run-out and the other collapse
+metrics against the particle spacing dx and the time step, with the local softening law
+of Eq. (17)-(19) and with its non-local regularisation (`material.plasticity.
+regularisation`, psph/softening.py), and their error against wall time.
+
+For `collapse_saturated_psi0` and `collapse_dry` (Section 4.4), dx in {0.04, 0.04/sqrt 2,
+0.02} (refinement ratio r = sqrt 2: 5,000, 10,000 and 20,000 particles) and dt in {1, 1/2,
+1/4} of the scheme's largest step at that dx: the solid cap Eq. (41) (dry, the
+projection); for TPI the scene's own 2e-5 s (the paper's; 82 % of TPI's bound under
+gravity, `limits.tpi_gain_dt_limit`, 2.43e-5 s at alpha = 0.5, below the cap at every
+dx); for explicit Eq. (42) and the undrained wave limit (only that step: about 4e-6 s at
+dx = 0.04, 1e-6 s at 0.02, a million steps). Every case runs on 2 ranks to the scene's
+end (1.2 s saturated, 2 s dry).
+
+Per metric and series (a scene, scheme, law and dt fraction over the three dx, or a dx
+over the three dt), `richardson` gives the observed order p = ln((f1 - f2) / (f2 - f3)) /
+ln r and the extrapolated value f* = f3 + (f3 - f2) / (r^p - 1) when the differences
+keep their sign (else no order: the series is not in its asymptotic range). A case's
+error is its distance to the reference of its scene, scheme and law: the dx-extrapolated
+run-out at the smallest dt fraction that has one, else the finest run.
+
+    .venv/bin/python bench/convergence.py --quick      # CI-sized (a 1 x 0.5 m dry column)
+    .venv/bin/python bench/convergence.py              # the full matrix (hours on 2 cores)
+    .venv/bin/python bench/convergence.py --only 'psi0 tpi .* dt=1'   # a subset (regex)
+    .venv/bin/python bench/convergence.py --table-only # table and PNG from the JSON
+
+Prints a table, writes bench/out/convergence[-quick].json (one entry per case, kept
+between runs: a case already measured is not run again unless --rerun) and draws
+bench/out/convergence[-quick].png (run-out error against wall time, and run-out
+against dx).
+"""
+
+import argparse
+import json
+import math
+import os
+import platform
+import re
+import subprocess
+import sys
+import time
+from datetime import date
+from pathlib import Path
+
+ROOT = Path(__file__).parent.parent
+OUT = Path(__file__).parent / "out"
+sys.path.insert(0, str(ROOT))
+
+from psph.verify.convergence import series  # noqa: E402
+
+DX = (0.04, 0.04 / math.sqrt(2.0), 0.02)
+FRACTIONS = (1.0, 0.5, 0.25)
+# the internal length of the regularised law: 2.5 dx at the coarsest spacing, 5 dx at the
+# finest (a material property in metres, the same at every dx)
+L_C = 0.1
+REGULARISED = [f"material.plasticity.regularisation={{kind='nonlocal', length={L_C}}}"]
+# the quick mode's column: 1 m x 0.5 m (a quarter of the Section 4.4 column's size) with
+# a fifth of the cohesion (1 kPa peak, 0.2 residual), so that it collapses as the 2 m
+# column does (critical height 4 c tan(45 + phi / 2) / gamma: 0.31 m here, 1.55 m there)
+QUICK_SETS = ["particles.blocks=[{min=[0.0, 0.0], max=[1.0, 0.5]}]", "domain.max=[4.0, 1.0]",
+              "material.plasticity.c=1.0e3", "material.plasticity.c_r=0.2e3",
+              "time.end=0.5", "output.interval=0.05"]
+QUICK_DX = (0.04, 0.04 / math.sqrt(2.0), 0.02)
+METRICS = ("runout_m", "final_height_m", "back_scarp_m", "slides", "plastic_work_J_per_m",
+           "excess_p_peak_Pa")
+
+
+def largest_dt(scene_name: str, scheme: str, dx: float, sets: list[str]) -> float:
+    """The scheme's largest stable step at dx (see the module docstring)."""
+    from psph.limits import (
+        fluid_dt_limit,
+        solid_dt_limit,
+        tpi_gain_dt_limit,
+        undrained_dt_limit,
+    )
+    from psph.scene import load_scene
+
+    own = load_scene(scene_name).time.dt
+    # a small time.dt: the scene's own may be beyond this scheme's limits
+    scene = load_scene(scene_name, sets + [f"particles.dx={dx!r}", "time.dt=1e-9"])
+    cap = solid_dt_limit(scene)
+    if scheme == "tpi":  # the scene's (the paper's) step, inside TPI's bound
+        return min(cap, tpi_gain_dt_limit(scene), own or math.inf)
+    if scheme == "explicit":
+        return min(cap, fluid_dt_limit(scene), undrained_dt_limit(scene))
+    return cap
+
+
+def cases(quick: bool) -> list[dict]:
+    """Every case: label, scene, --set overrides and its coordinates (dx, dt fraction,
+    scheme, law)."""
+    out = []
+    if quick:
+        plan = [("collapse_dry", "dry", QUICK_SETS, QUICK_DX, (1.0,))]
+    else:
+        plan = [("collapse_saturated_psi0", s, [], DX, (1.0,) if s == "explicit" else FRACTIONS)
+                for s in ("tpi", "projection", "explicit")]
+        plan.append(("collapse_dry", "dry", [], DX, FRACTIONS))
+    for scene, scheme, base, dxs, fractions in plan:
+        sets = list(base)
+        if scheme == "projection":
+            sets += ["pressure.scheme='projection'", "pressure.tolerance=1e-6"]
+        elif scheme == "explicit":
+            sets += ["pressure.scheme='explicit'"]
+        for law in ("local", "regularised"):
+            law_sets = sets + (REGULARISED if law == "regularised" else [])
+            for dx in dxs:
+                top = largest_dt(scene, scheme, dx, law_sets)
+                for f in fractions:
+                    dt = f * top
+                    short = scene.replace("collapse_saturated_", "").replace("collapse_", "")
+                    out.append({
+                        "label": f"{short} {scheme} {law} dx={dx:.4g} dt={f:g}",
+                        "scene": scene, "scheme": scheme, "law": law, "dx": dx,
+                        "dt_fraction": f, "dt": dt,
+                        "sets": law_sets + [f"particles.dx={dx!r}", f"time.dt={dt!r}"]})
+    return out
+
+
+def run_case(case: dict, out: Path) -> dict:
+    """One case on 2 ranks; its metrics from summary.json, or how it failed."""
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
+               OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1")
+    cmd = ["mpirun", "-n", "2", sys.executable, "-m", "psph", "run", case["scene"], "--out",
+           str(out), "--quiet"]
+    for s in case["sets"]:
+        cmd += ["--set", s]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, cwd=ROOT, stderr=subprocess.PIPE, text=True)
+    entry = {k: case[k] for k in ("label", "scene", "scheme", "law", "dx", "dt_fraction",
+                                  "dt", "sets")}
+    entry.update(exit_code=proc.returncode, bench_wall_s=time.perf_counter() - t0)
+    summary = out / "summary.json"
+    if proc.returncode != 0 or not summary.is_file():
+        entry["failure"] = proc.stderr.strip().splitlines()[-1:] if proc.stderr else []
+        return entry
+    s = json.loads(summary.read_text())
+    m = s.get("metrics", {})
+    col = m.get("collapse", {})
+    entry.update(wall_s=s["wall_time_s"], steps=s["steps"], particles=s["particles"])
+    for k in METRICS:
+        if k in col:
+            entry[k] = col[k]
+    if "excess_p_peak_Pa" not in entry and "pressure_quality" in m:
+        extremes = m["pressure_quality"].get("extremes", {})
+        if "max" in extremes:
+            entry["excess_p_peak_Pa"] = extremes["max"].get("value")
+    return entry
+
+
+def errors(report: list[dict], rich: list[dict], metric: str = "runout_m") -> None:
+    """Each case's relative distance to its scene, scheme and law's reference (in place:
+    `<metric>_error`, `reference`)."""
+    for e in report:
+        if metric not in e:
+            continue
+        same = [s for s in rich if (s["scene"], s["scheme"], s["law"], s["in"])
+                == (e["scene"], e["scheme"], e["law"], "dx") and s["extrapolated"] is not None]
+        if same:
+            ref = min(same, key=lambda s: float(s["at"].split("=")[1]))
+            value, kind = ref["extrapolated"], f"extrapolated in dx at {ref['at']}"
+        else:
+            group = [g for g in report if metric in g and (g["scene"], g["scheme"], g["law"])
+                     == (e["scene"], e["scheme"], e["law"])]
+            finest = min(group, key=lambda g: (g["dx"], g["dt_fraction"]))
+            value, kind = finest[metric], f"finest run ({finest['label']})"
+        e[f"{metric}_error"] = abs(e[metric] - value) / abs(value) if value else None
+        e["reference"] = kind
+
+
+def table(report: list[dict], rich: list[dict]) -> None:
+    print(f"{'case':44s} {'exit':>4s} {'wall s':>8s} {'particles':>9s} {'runout m':>9s} "
+          f"{'error':>7s} {'height m':>8s} {'scarp m':>8s} {'slides':>6s} {'W_p J/m':>9s}")
+    def num(e, k, fmt):
+        return format(e[k], fmt) if e.get(k) is not None else "-"
+
+    for e in report:
+        print(f"{e['label']:44s} {e['exit_code']:4d} {num(e, 'wall_s', '8.1f')} "
+              f"{num(e, 'particles', '9d')} {num(e, 'runout_m', '9.4f')} "
+              f"{num(e, 'runout_m_error', '7.2%')} {num(e, 'final_height_m', '8.3f')} "
+              f"{num(e, 'back_scarp_m', '8.3f')} {num(e, 'slides', '6d')} "
+              f"{num(e, 'plastic_work_J_per_m', '9.4g')}")
+    print("\nrun-out series (coarse to fine): observed order, extrapolated value, change "
+          "between the two finest")
+    for s in rich:
+        order = f"{s['order']:.2f}" if s["order"] is not None else "-"
+        ext = f"{s['extrapolated']:.4f}" if s["extrapolated"] is not None else "-"
+        vals = " ".join(f"{v:.4f}" for v in s["values"])
+        change = f"{s['finest_change']:.2%}" if s["finest_change"] is not None else "-"
+        print(f"  {s['scene']:24s} {s['scheme']:10s} {s['law']:11s} in {s['in']} "
+              f"{s['at']:10s} {vals}  p = {order:5s} f* = {ext:8s} finest change {change}")
+
+
+def plot(report: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.8))
+    marker = {"local": "o", "regularised": "s"}
+    groups = sorted({(e["scene"], e["scheme"], e["law"]) for e in report if "runout_m" in e})
+    for g in groups:
+        rows = [e for e in report if (e["scene"], e["scheme"], e["law"]) == g
+                and e.get("runout_m_error") is not None]
+        label = f"{g[0].replace('collapse_', '')} {g[1]} {g[2]}"
+        if rows:
+            ax.loglog([e["wall_s"] for e in rows],
+                      [max(e["runout_m_error"], 1e-4) for e in rows], marker[g[2]],
+                      label=label, alpha=0.8)
+        top = sorted((e for e in report if (e["scene"], e["scheme"], e["law"]) == g
+                      and "runout_m" in e and e["dt_fraction"] == 1.0), key=lambda e: e["dx"])
+        if top:
+            bx.plot([e["dx"] for e in top], [e["runout_m"] for e in top],
+                    "-" + marker[g[2]], label=label)
+    ax.set_xlabel("wall time on 2 ranks (s)")
+    ax.set_ylabel("run-out error against the reference (floor 1e-4)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    bx.set_xlabel("dx (m)")
+    bx.set_ylabel("run-out (m), largest dt")
+    bx.grid(True, alpha=0.3)
+    bx.legend(fontsize=7)
+    fig.suptitle(f"psph convergence of the collapse run-out ({date.today()}, "
+                 f"{platform.node()})")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="the CI-sized dry column")
+    ap.add_argument("--only", help="run only the cases whose label matches this regex")
+    ap.add_argument("--rerun", action="store_true", help="run cases already in the JSON")
+    ap.add_argument("--table-only", action="store_true", help="no runs: table and PNG")
+    args = ap.parse_args(argv)
+    OUT.mkdir(parents=True, exist_ok=True)
+    name = "convergence-quick" if args.quick else "convergence"
+    path = OUT / f"{name}.json"
+    old = json.loads(path.read_text())["cases"] if path.is_file() else []
+    by_label = {e["label"]: e for e in old}
+    todo = cases(args.quick)
+    if args.only:
+        todo = [c for c in todo if re.search(args.only, c["label"])]
+    if not args.table_only:
+        for c in todo:
+            if c["label"] in by_label and not args.rerun and by_label[c["label"]].get(
+                    "exit_code") == 0:
+                continue
+            slug = re.sub(r"[^A-Za-z0-9.=-]+", "_", c["label"])
+            print(f"[convergence] {c['label']} ...", flush=True)
+            by_label[c["label"]] = run_case(c, OUT / name / slug)
+            report = {"date": str(date.today()), "machine": platform.node(),
+                      "cases": list(by_label.values())}
+            path.write_text(json.dumps(report, indent=1))
+    report = list(by_label.values())
+    rich = series(report)
+    errors(report, rich)
+    table(report, rich)
+    path.write_text(json.dumps({"date": str(date.today()), "machine": platform.node(),
+                                "l_c_m": L_C, "cases": report, "series": rich}, indent=1))
+    plot(report, OUT / f"{name}.png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,50 @@
+"""Observed order of convergence and Richardson extrapolation of a metric over three
+refinements (issue 17: `bench/convergence.py`). With f1, f2, f3 the values at the
+coarse, middle and fine resolution and a constant ratio r between them,
+
+    p = ln((f1 - f2) / (f2 - f3)) / ln r,    f* = f3 + (f3 - f2) / (r^p - 1)
+
+(Roache's grid-convergence form), defined only when the two differences keep one sign.
+"""
+
+import math
+
+
+def richardson(f: list[float], r: float) -> dict:
+    """Observed order and extrapolated value of three values f (coarse to fine) at the
+    constant refinement ratio r; {"order": None, ...} when the differences change sign
+    or vanish (no asymptotic range to extrapolate from)."""
+    d1, d2 = f[0] - f[1], f[1] - f[2]
+    if d1 == 0.0 or d2 == 0.0 or (d1 > 0.0) != (d2 > 0.0):
+        return {"order": None, "extrapolated": None}
+    p = math.log(d1 / d2) / math.log(r)
+    if not p > 0.0:  # diverging differences: no limit to extrapolate to
+        return {"order": p, "extrapolated": None}
+    return {"order": p, "extrapolated": f[2] + (f[2] - f[1]) / (r ** p - 1.0)}
+
+
+def series(report: list[dict], metric: str = "runout_m") -> list[dict]:
+    """Richardson over dx (r = sqrt 2) for every scene, scheme, law and dt fraction with
+    three spacings measured, and over dt (r = 2) for every dx with three fractions."""
+    done = [e for e in report if metric in e]
+    out = []
+    keys = {(e["scene"], e["scheme"], e["law"]) for e in done}
+    for scene, scheme, law in sorted(keys):
+        group = [e for e in done if (e["scene"], e["scheme"], e["law"]) == (scene, scheme, law)]
+        for f in sorted({e["dt_fraction"] for e in group}, reverse=True):
+            row = sorted((e for e in group if e["dt_fraction"] == f), key=lambda e: -e["dx"])
+            if len(row) == 3:
+                vals = [e[metric] for e in row]
+                out.append({"scene": scene, "scheme": scheme, "law": law, "in": "dx",
+                            "at": f"dt={f:g}", "values": vals,
+                            "finest_change": abs(vals[2] - vals[1]) / abs(vals[2])
+                            if vals[2] else None, **richardson(vals, math.sqrt(2.0))})
+        for dx in sorted({e["dx"] for e in group}, reverse=True):
+            col = sorted((e for e in group if e["dx"] == dx), key=lambda e: -e["dt_fraction"])
+            if len(col) == 3:
+                vals = [e[metric] for e in col]
+                out.append({"scene": scene, "scheme": scheme, "law": law, "in": "dt",
+                            "at": f"dx={dx:.4g}", "values": vals,
+                            "finest_change": abs(vals[2] - vals[1]) / abs(vals[2])
+                            if vals[2] else None, **richardson(vals, 2.0)})
+    return out
