@@ -40,6 +40,8 @@ FIELDS: tuple[Field, ...] = (
     Field("poro0", 1, "1", "initial porosity", False),
     Field("vol0", 1, "m^2", "initial volume", False),
     Field("eps_p", 1, "1", "equivalent plastic strain", False),
+    Field("plastic_work", 1, "J/m^3", "dissipated plastic work sigma' : d eps_p, "
+          "accumulated (Eq. 13-15; issue 17)", False),
     Field("drained_from", 1, "s", "time from which p = 0 is imposed (inf: never)", False),
     Field("surface", 1, "1", "1 on the loaded surface layer (settlement diagnostics)", False),
     Field("load_index", 1, "1", "index of the surface load acting on the particle, or -1", False),
@@ -50,7 +52,7 @@ FIELDS: tuple[Field, ...] = (
 
 FIELD_BY_NAME = {f.name: f for f in FIELDS}
 # fields added after checkpoint format 1 was fixed: zero when an older checkpoint lacks them
-ADDED_FIELDS = ("dp_prev", "material")
+ADDED_FIELDS = ("dp_prev", "material", "plastic_work")
 NEIGHBOUR_FIELDS = tuple(f.name for f in FIELDS if f.neighbour)
 
 

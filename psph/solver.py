@@ -434,7 +434,7 @@ class Simulation:
                       self.scene.pressure.beta, self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
                       st.eps_p, self.softening.eps_hat if self.softening else st.eps_p,
-                      self.ponding, self.symplectic)
+                      self.ponding, self.symplectic, st.plastic_work)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

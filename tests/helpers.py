@@ -107,7 +107,7 @@ def compare_runs(path_one: Path, path_two: Path, last_only: bool = False):
     for a, b in zip(one, two, strict=True):
         if not np.array_equal(a["id"], b["id"]):  # every particle exactly once
             return f"ids differ at step {a['step']}"
-        for field in ("x", "u", "v", "p", "n", "stress", "material"):
+        for field in ("x", "u", "v", "p", "n", "stress", "eps_p", "plastic_work", "material"):
             if field in a and field in b and not np.array_equal(a[field], b[field]):
                 diff = np.max(np.abs(a[field] - b[field]))
                 return f"{field} differs at step {a['step']} (max abs diff {diff:.3e})"

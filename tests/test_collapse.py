@@ -42,3 +42,27 @@ def test_collapse_metrics_in_summary(collapse):
     assert m["initial_height_m"] == pytest.approx(2.0)
     assert 1.9 < m["final_height_m"] <= 2.0 + 1e-6
     assert 0.0 < m["back_scarp_m"] <= m["toe_m"] + 0.1
+
+
+def test_collapse_metric_series_in_summary(collapse):
+    """`metrics.collapse.series` (issue 17, item 2): one entry a snapshot; the dissipated
+    plastic work sum_i w_i V_i never decreases and ends at the top-level value, as the
+    run-out series at the last snapshot's `runout_m`; the run-out's percentile spread and
+    the slide times' resolution (the snapshot interval) are reported."""
+    m = json.loads((collapse / "summary.json").read_text())["metrics"]["collapse"]
+    series = m["series"]
+    snaps = read_snapshots(collapse / "particles.h5")
+    assert {len(v) for v in series.values()} == {len(snaps)}
+    assert series["time_s"] == [s["time"] for s in snaps]
+    work = np.array(series["plastic_work_J_per_m"])
+    assert work[0] == 0.0 and work[-1] > 0.0 and np.all(np.diff(work) >= 0.0)
+    last = snaps[-1]
+    assert work[-1] == pytest.approx(np.sum(last["plastic_work"] * last["vol"]), rel=1e-12)
+    assert m["plastic_work_J_per_m"] == work[-1]
+    assert series["runout_m"][-1] == m["runout_m"] and series["toe_m"][-1] == m["toe_m"]
+    assert series["back_scarp_m"] == m["back_scarp_history_m"]
+    assert 0.0 <= m["runout_spread_m"] < 0.5 * m["toe_m"]
+    assert m["slide_time_resolution_s"] == pytest.approx(0.1, rel=1e-3)
+    assert "excess_p_peak_Pa" not in m  # a dry run has no pore pressure
+    # where the particles yielded they dissipated work, elsewhere none
+    assert np.all((last["plastic_work"] > 0.0) == (last["eps_p"] > 0.0))

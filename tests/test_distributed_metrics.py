@@ -75,9 +75,10 @@ def test_shares_on_two_ranks_give_the_serial_metrics():
 @pytest.mark.mpi(min_size=2)
 def test_collapse_verification_on_two_ranks_equals_one_process(tmp_path_factory):
     """The whole end-of-run block of a saturated collapse (psph.verify.collapse_verification:
-    collapse metrics, slides, every snapshot's pressure quality) read in shares on 2 ranks
-    equals the one-process block: exactly, but the checkerboard indices (their sums in
-    another order) to a relative 1e-12."""
+    collapse metrics and their series with the dissipated plastic work (an exact sum),
+    slides, every snapshot's pressure quality) read in shares on 2 ranks equals the
+    one-process block: exactly, but the checkerboard indices (their sums in another
+    order) to a relative 1e-12."""
     from psph.run import run
     from psph.scene import load_scene
     from psph.verify import collapse_verification
@@ -92,7 +93,14 @@ def test_collapse_verification_on_two_ranks_equals_one_process(tmp_path_factory)
     two = collapse_verification(out / "particles.h5", scene, comm)
     if comm.Get_rank() == 0:
         one = collapse_verification(out / "particles.h5", scene, MPI.COMM_SELF)
-        assert two["collapse"] == one["collapse"]
+        assert two["collapse"] == one["collapse"]  # the series and plastic work too
+        series = one["collapse"]["series"]
+        assert {len(v) for v in series.values()} == {3}
+        for key in ("plastic_work_J_per_m", "excess_p_max_Pa", "excess_p_p99_Pa"):
+            assert key in series, key
+        for key in ("plastic_work_J_per_m", "excess_p_peak_Pa", "excess_p_final_Pa",
+                    "runout_spread_m", "slide_time_resolution_s"):
+            assert key in one["collapse"], key
         a, b = one["pressure_quality"]["series"], two["pressure_quality"]["series"]
         assert a.keys() == b.keys() and len(a["time_s"]) == 3
         for key in a:

@@ -115,7 +115,8 @@ def test_regularised_softening_one_vs_two_ranks_bitwise(tmp_path_factory):
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    _one_vs_two(comm, load_scene("collapse_dry", REGULARISED), out, extra=("eps_p",))
+    _one_vs_two(comm, load_scene("collapse_dry", REGULARISED), out,
+                extra=("eps_p", "plastic_work"))
     spread = None
     if comm.Get_rank() == 0:
         last = read_snapshots(out / "two" / "particles.h5")[-1]

@@ -118,16 +118,18 @@ def test_restart_with_the_projection_continues_bitwise(tmp_path):
     assert summary["steps_this_run"] < summary["steps"]
     assert compare_runs(tmp_path / "full" / "particles.h5",
                         tmp_path / "again" / "particles.h5") is None
-    # a checkpoint written before `dp_prev` existed reads it as zeros (the next guess is
-    # then 2 (p^n - p^(n-1)), a guess only)
+    # a checkpoint written before `dp_prev` (or `plastic_work`, issue 17) existed reads it
+    # as zeros (the next guess is then 2 (p^n - p^(n-1)), a guess only)
     import h5py
 
     from psph.io.checkpoint import read_checkpoint
 
     with h5py.File(tmp_path / "full" / "checkpoint.h5", "a") as f:
         del f["particles"]["dp_prev"]
+        del f["particles"]["plastic_work"]
     _, arrays = read_checkpoint(tmp_path / "full" / "checkpoint.h5")
-    assert np.all(arrays["dp_prev"] == 0.0) and len(arrays["dp_prev"]) == len(arrays["p"])
+    for name in ("dp_prev", "plastic_work"):
+        assert np.all(arrays[name] == 0.0) and len(arrays[name]) == len(arrays["p"]), name
     summary = run(scene, tmp_path / "full", quiet=True,
                   restart=tmp_path / "full" / "checkpoint.h5")  # the distributed read too
     assert summary["status"] == "finished" and summary["pressure_solve"]["steps_not_converged"] == 0

@@ -39,6 +39,7 @@ def export_run(out: Path, fmt: str) -> list[Path]:
         points[:, :dim] = s["x"]
         data = {"id": s["id"], "p": s["p"], "n": s["n"], "eps_p": s["eps_p"],
                 "material": s.get("material", np.zeros(n, np.int64)),
+                "plastic_work": s.get("plastic_work", np.zeros(n)),
                 "u": _pad3(s["u"]), "v": _pad3(s["v"]), "stress": s["stress"]}
         mesh = meshio.Mesh(points, [("vertex", np.arange(n).reshape(-1, 1))],
                            point_data=data)

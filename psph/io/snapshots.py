@@ -19,6 +19,8 @@ SNAPSHOT_FIELDS = {
     "n": ("1", "porosity"),
     "stress": ("Pa", "effective stress xx, yy, zz, xy, yz, zx, tension positive"),
     "eps_p": ("1", "equivalent plastic strain"),
+    "plastic_work": ("J/m^3", "dissipated plastic work sigma' : d eps_p, accumulated"),
+    "vol": ("m^2", "particle volume per unit thickness (sum plastic_work vol: J/m)"),
     "material": ("1", "index of the particle's material (0: [material] or the first of "
                  "[[materials]], in scene order)"),
 }
@@ -38,6 +40,8 @@ def snapshot_arrays(store) -> dict[str, np.ndarray]:
         "n": store.poro[:n].copy(),
         "stress": stress6,
         "eps_p": store.eps_p[:n].copy(),
+        "plastic_work": store.plastic_work[:n].copy(),
+        "vol": store.vol[:n].copy(),
         "material": store.material[:n].astype(np.int64),
     }
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 from psph.errors import OutputError
 
-# id, x, u, v, p, n, stress, eps_p, material
-SNAPSHOT_ROW_BYTES = 8 * (1 + 2 + 2 + 2 + 1 + 1 + 6 + 1 + 1)
+# id, x, u, v, p, n, stress, eps_p, plastic_work, vol, material
+SNAPSHOT_ROW_BYTES = 8 * (1 + 2 + 2 + 2 + 1 + 1 + 6 + 1 + 1 + 1 + 1)
 SLACK_BYTES = 1 << 18  # HDF5 metadata and attributes (the side files are small)
 
 

@@ -49,10 +49,11 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
               s_f):
     """Return the trial stress to the Drucker-Prager surface.
 
-    Returns (sxx, syy, szz, sxy, d_lambda, d_eps_p): the corrected stress, the plastic
-    multiplier of Eq. (13) and the increment of the equivalent plastic strain
-    d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain = d_lambda / sqrt(3).
-    A trial state with f <= 0 is returned unchanged (d_lambda = 0).
+    Returns (sxx, syy, szz, sxy, d_lambda, d_eps_p, d_w): the corrected stress, the
+    plastic multiplier of Eq. (13), the increment of the equivalent plastic strain
+    d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain = d_lambda / sqrt(3),
+    and the plastic work increment d_w = sigma : d eps_p (J/m^3, `plastic_work`).
+    A trial state with f <= 0 is returned unchanged (d_lambda = 0, d_w = 0).
 
     Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
     with the sign that keeps f = 0 to first order after the update (softening makes
@@ -65,7 +66,7 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
     rj2 = math.sqrt(j2)
     f = xi * i1 + rj2 - kap
     if not f > 0.0:
-        return sxx, syy, szz, sxy, 0.0, 0.0
+        return sxx, syy, szz, sxy, 0.0, 0.0, 0.0
     d_lam = 0.0
     if rj2 > 1e-12 * (abs(i1) + kap + 1.0):
         # df/d eps_p of the softened surface: d(xi)/d eps I1 - d(kappa)/d eps
@@ -111,4 +112,17 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
         syy = m + r * dyy
         szz = m + r * dzz
         sxy = r * sxy
-    return sxx, syy, szz, sxy, d_lam, d_eps
+    d_w = plastic_work_increment(sxx, syy, szz, sxy, d_lam, xi_psi)
+    return sxx, syy, szz, sxy, d_lam, d_eps, d_w
+
+
+@nb.njit(cache=True, inline="always")
+def plastic_work_increment(sxx, syy, szz, sxy, d_lam, xi_psi):
+    """sigma : d eps_p (J/m^3) of one return: d eps_p = d_lambda dg/dsigma with the
+    potential g = xi_psi I1 + sqrt(J2) of Eq. (15), homogeneous of degree 1 in sigma, so
+    sigma : dg/dsigma = g and d_w = d_lambda (xi_psi I1 + sqrt(J2)) at the returned stress
+    (xi_psi of Eq. 16 at the softened psi of Eq. 19 that set the flow direction)."""
+    if d_lam == 0.0:
+        return 0.0
+    i1, _, _, _, j2 = _invariants(sxx, syy, szz, sxy)
+    return d_lam * (xi_psi * i1 + math.sqrt(j2))

@@ -172,7 +172,8 @@ def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, 
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, mat, material,
             bulk_water, gamma_l, rho_l, b0, b1, damping, scheme, alpha, beta,
-            acc_term, correct_strain, box, plastic, eps_p, eps_soft, ponding, kicked):
+            acc_term, correct_strain, box, plastic, eps_p, eps_soft, ponding, kicked,
+            plastic_work):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
 
@@ -188,7 +189,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
     psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
     the softening of Eq. (17)-(19) takes eps_soft[i]: eps_p itself (the local law) or the
-    regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17).
+    regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17); plastic_work
+    accumulates the dissipated work sigma : d eps_p (J/m^3, `plasticity.dp_return`).
     ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
     hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
     kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
@@ -250,6 +252,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
             stress[i, 2] = r[2]
             stress[i, 3] = r[3]
             eps_p[i] += r[5]
+            plastic_work[i] += r[6]
 
         if scheme != SCHEME_NONE:
             # porosity rate, Eq. (24): trace(Gn Minv)

@@ -84,36 +84,38 @@ def _strip(scene, hist, probes) -> dict:
 def collapse_verification(path, scene, comm) -> dict:
     """The `metrics` block of a collapse or slope run from its snapshots `path`
     (particles.h5): the collapse metrics of the last snapshot, the slides over all of
-    them and, for a coupled run, the pressure quality (Sections 4.4-4.5). Collective:
-    each rank reads its share of each snapshot's rows in turn (no rank holds a snapshot
-    or any array as long as the particle count; psph/verify/distributed.py)."""
+    them, the time series of the metrics (`series`: one entry a snapshot; README,
+    "Collapse metrics") and, for a coupled run, the pressure quality (Sections 4.4-4.5).
+    Collective: each rank reads its share of each snapshot's rows in turn (no rank holds
+    a snapshot or any array as long as the particle count; psph/verify/distributed.py)."""
     import h5py
 
-    from psph.verify.collapse import collapse_metrics, slides_from
-    from psph.verify.distributed import read_share
+    from psph.verify.collapse import collapse_metrics, series_block, slides_from
+    from psph.verify.distributed import exact_dot, read_share
     from psph.verify.pressure import pressure_quality_from, snapshot_quality
 
     dx = scene.particles.dx
     coupled = scene.pressure.scheme != "none"
     names = ("id", "x", "u", "p", "stress") if coupled else ("x", "u")
-    times, scarps, rows = [], [], []
-    h0 = metrics = None
+    snaps, rows = [], []
     with h5py.File(path, "r") as f:
-        groups = sorted(f["snapshots"])
-        for k, name in enumerate(groups):
+        for name in sorted(f["snapshots"]):
             g = f["snapshots"][name]
-            snap = read_share(g, names, comm)
+            work = all(k in g for k in ("plastic_work", "vol"))  # older files lack them
+            snap = read_share(g, names + (("plastic_work", "vol") if work else ()), comm)
             snap["time"] = float(g.attrs["time"])
             m = collapse_metrics(snap["x"], snap["x"] - snap["u"], dx, comm)
-            h0 = m["initial_height_m"] if h0 is None else h0
-            times.append(snap["time"])
-            scarps.append(m["back_scarp_m"])
-            if k == len(groups) - 1:
-                metrics = m
+            m["time_s"] = snap["time"]
+            # dissipated plastic work per metre (plane strain), the same bits on any ranks
+            m["plastic_work_J_per_m"] = exact_dot(snap["plastic_work"], snap["vol"], comm) \
+                if work else None
+            snaps.append(m)
             if coupled:
                 rows.append(snapshot_quality(snap, scene, comm))
-    out = {"collapse": metrics, "time_s": times[-1]}
-    out["collapse"].update(slides_from(np.array(times), np.array(scarps), h0, dx))
+    out = {"collapse": series_block(snaps, rows), "time_s": snaps[-1]["time_s"]}
+    out["collapse"].update(slides_from(np.array(out["collapse"]["series"]["time_s"]),
+                                       np.array(out["collapse"]["series"]["back_scarp_m"]),
+                                       snaps[0]["initial_height_m"], dx))
     if coupled:
         out["pressure_quality"] = pressure_quality_from(rows, scene)
     return out

@@ -14,6 +14,8 @@ def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float, comm=None) -> dic
     - runout_m: how far the toe advanced: the 99.8th percentile of x (a few splashed
       particles do not count) minus the initial largest x;
     - toe_m: that percentile itself;
+    - runout_spread_m: the 99.8th minus the 99th percentile of x, the run-out's
+      sensitivity to the percentile chosen (its own resolution);
     - final_height_m / initial_height_m: the highest particle within 5 dx of the left
       end of the mass;
     - back_scarp_m: the smallest x where the free surface lies below 95 % of the initial
@@ -23,7 +25,7 @@ def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float, comm=None) -> dic
     per column reduced over the ranks; psph/verify/distributed.py).
     """
     comm = MPI.COMM_SELF if comm is None else comm
-    toe = percentiles(x[:, 0], [99.8], comm)[0]
+    toe_99, toe = percentiles(x[:, 0], [99.0, 99.8], comm)
     left = -_max(-x0[:, 0], comm)
     h0 = _max(x0[:, 1], comm) + 0.5 * dx
     near = x[:, 0] < left + 5 * dx
@@ -37,6 +39,7 @@ def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float, comm=None) -> dic
     low = np.flatnonzero(top < 0.95 * h0)
     scarp = float(left + 2 * dx * low[0]) if len(low) else _max(x[:, 0], comm)
     return {"runout_m": toe - _max(x0[:, 0], comm), "toe_m": toe,
+            "runout_spread_m": toe - toe_99,
             "initial_height_m": h0, "final_height_m": height, "back_scarp_m": scarp}
 
 
@@ -87,6 +90,32 @@ def slide_history(snaps: list[dict], dx: float) -> dict:
                        for s in snaps])
     h0 = collapse_metrics(snaps[0]["x"], snaps[0]["x"] - snaps[0]["u"], dx)["initial_height_m"]
     return slides_from(times, scarps, h0, dx)
+
+
+SERIES_KEYS = ("time_s", "runout_m", "toe_m", "runout_spread_m", "final_height_m",
+               "back_scarp_m", "plastic_work_J_per_m")
+
+
+def series_block(snaps: list[dict], rows: list[dict]) -> dict:
+    """`metrics.collapse` before the slides: the last snapshot's `collapse_metrics`, its
+    dissipated plastic work sum_i w_i V_i (J/m; `plastic_work`), and `series`, one list
+    a quantity over the snapshots (`SERIES_KEYS`; with the pressure quality's `rows` of a
+    coupled run also the largest excess p and its 99th percentile over the particles).
+    The excess p's peak is the largest over the snapshots, its final value the last
+    snapshot's largest. The time resolution of the slide times is the longest snapshot
+    interval (`slide_time_resolution_s`).
+    snaps: per snapshot `collapse_metrics` plus time_s and plastic_work_J_per_m."""
+    out = {k: v for k, v in snaps[-1].items() if k != "time_s"}
+    series = {k: [s[k] for s in snaps] for k in SERIES_KEYS}
+    if rows:
+        series["excess_p_max_Pa"] = [r["excess_max_Pa"] for r in rows]
+        series["excess_p_p99_Pa"] = [r["excess_p99_Pa"] for r in rows]
+        out["excess_p_peak_Pa"] = max(series["excess_p_max_Pa"])
+        out["excess_p_final_Pa"] = series["excess_p_max_Pa"][-1]
+    times = np.asarray(series["time_s"])
+    out["slide_time_resolution_s"] = float(np.diff(times).max()) if len(times) > 1 else 0.0
+    out["series"] = series
+    return out
 
 
 def slides_from(times: np.ndarray, scarps: np.ndarray, h0: float, dx: float) -> dict:

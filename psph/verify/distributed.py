@@ -14,6 +14,7 @@ import numpy as np
 from mpi4py import MPI
 
 from psph.decomposition.slabs import distributed_cuts, order_statistics
+from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, exact_total, local_parts
 
 
 def share(n: int, comm) -> tuple[int, int]:
@@ -41,6 +42,16 @@ def percentiles(values: np.ndarray, qs, comm) -> list[float]:
     gamma = virtual - below
     diff = b - a  # numpy's _lerp: from the nearer end
     return [float(v) for v in np.where(gamma >= 0.5, b - diff * (1 - gamma), a + diff * gamma)]
+
+
+def exact_dot(a: np.ndarray, b: np.ndarray, comm) -> float:
+    """sum_k a_k b_k over all ranks' rows, correctly rounded: the same bits on any
+    partition (the ranks' exact expansions gathered, psph/kernels/exact_sum.py)."""
+    a = np.ascontiguousarray(a, float)
+    b = np.ascontiguousarray(b, float)
+    partials = np.zeros(EXPANSION_CAP)
+    parts = local_parts(partials, dot_expansion(a, b, len(a), partials)).copy()
+    return exact_total(comm.allgather(parts))
 
 
 def extreme(values: np.ndarray, ids: np.ndarray, x: np.ndarray, comm, largest: bool

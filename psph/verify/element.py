@@ -267,7 +267,7 @@ class _SphBlock:
                       "p_prev": np.zeros(n), "poro": np.full(n, par.porosity),
                       "vol": np.full(n, par.dx**2), "rho": np.full(n, rho),
                       "perm": np.full(n, par.perm), "acc": np.zeros((n, 2)),
-                      "eps_p": np.zeros(n)}
+                      "eps_p": np.zeros(n), "plastic_work": np.zeros(n)}
         self.poro0 = np.full(n, par.porosity)
         self.vol0 = np.full(n, par.dx**2)
         self.drained_from = np.full(n, 0.0 if drained else np.inf)
@@ -297,7 +297,7 @@ class _SphBlock:
                       self.traction, self.load_value, par.dt, self.mat, self.material, par.K_l,
                       par.rho_l * par.g, par.rho_l, 0.0, 0.0, 0.0, SCHEME_EXPLICIT,
                       0.0, 0.0, False, self.correct_strain, self.box, True,
-                      st["eps_p"], st["eps_p"], 0, True)
+                      st["eps_p"], st["eps_p"], 0, True, st["plastic_work"])
         if bad >= 0:
             raise FloatingPointError(f"advance flagged particle {bad} at t = {self.t:g} s")
         c = self.centre
