@@ -33,6 +33,7 @@ class NonlocalSoftening:
         self.weights = np.array([r.m if r is not None else 1.0 for r in regs])
         self.rings = rings_for(float(self.lengths.max()), cell_size)
         self.eps_hat = np.zeros(0)
+        self.plastic_cell = np.zeros(0, np.int8)  # cells holding plastic strain (scratch)
 
     def name(self) -> str:
         lc = ", ".join(f"{v:g}" for v in self.lengths if v > 0.0)
@@ -45,9 +46,12 @@ class NonlocalSoftening:
         st = store
         if self.eps_hat.shape[0] < st.cap:
             self.eps_hat = np.zeros(st.cap)
+        cells = int(ncell[0] * ncell[1])
+        if self.plastic_cell.shape[0] < cells:
+            self.plastic_cell = np.zeros(2 * cells, np.int8)
         nonlocal_strain(st.n_owned, st.n_real, st.x, st.vol, st.eps_p, st.material,
                         self.lengths, self.weights, cell_of, cell_start, order, ncell,
-                        self.rings, self.eps_hat)
+                        self.rings, self.plastic_cell, self.eps_hat)
 
 
 def nonlocal_softening(scene, cell_size: float) -> NonlocalSoftening | None:

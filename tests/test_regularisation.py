@@ -29,7 +29,8 @@ def _average(x, eps, lengths, weights, material=None, n_owned=None):
     out = np.full(n, np.nan)
     nonlocal_strain(n if n_owned is None else n_owned, n, x, np.full(n, DX * DX), eps,
                     material, np.asarray(lengths, float), np.asarray(weights, float), cell_of,
-                    cell_start, order, ncell, rings_for(max(lengths), 2 * H), out)
+                    cell_start, order, ncell, rings_for(max(lengths), 2 * H),
+                    np.zeros(int(ncell[0] * ncell[1]), np.int8), out)
     return out
 
 

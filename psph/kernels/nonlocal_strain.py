@@ -29,36 +29,43 @@ from psph.kernels.spline import w_cubic
 
 @nb.njit(cache=True)
 def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
-                    cell_start, order, ncell, rings, out):
+                    cell_start, order, ncell, rings, plastic_cell, out):
     """out[i] = eps_hat_i of particles 0..n_owned-1 (module docstring).
 
     lengths[k], weights[k]: l_c (m) and m of material k (l_c = 0: local, out = eps_p);
     cell_of, cell_start, order, ncell: the step's cell lists (cells of side 2h, particles
-    in key order in a cell); rings: cells to search on each side, >= 2 max l_c / (2h).
+    in key order in a cell); rings: cells to search on each side, >= 2 max l_c / (2h);
+    plastic_cell: scratch of at least ncell[0] * ncell[1] entries.
     Each sum visits the cells row by row in the global numbering and a cell in key
     order: the same particles in the same order on any number of ranks (bitwise 1 vs N,
-    with a halo of at least 2 l_c). Before anything yields the sums are skipped."""
+    with a halo of at least 2 l_c). A particle with no plastic strain in the cells it
+    searches keeps eps_hat = eps_p = 0 without the sum (which would give exactly that):
+    the sums run only where something has yielded within the support."""
     ncx = ncell[0]
     ncy = ncell[1]
-    plastic = False
+    for c in range(ncx * ncy):
+        plastic_cell[c] = 0
     for j in range(n_real):
         if eps_p[j] != 0.0:
-            plastic = True
-            break
-    if not plastic:  # nothing has yielded on this rank or its halo: every average is 0
-        for i in range(n_owned):
-            out[i] = eps_p[i]
-        return
+            plastic_cell[cell_of[j]] = 1
     for i in range(n_owned):
         k = int(material[i])
         lc = lengths[k]
         if not lc > 0.0:
             out[i] = eps_p[i]
             continue
-        support2 = 4.0 * lc * lc
         c = cell_of[i]
         cx = c % ncx
         cy = c // ncx
+        near = False
+        for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
+            for nx in range(max(cx - rings, 0), min(cx + rings + 1, ncx)):
+                if plastic_cell[ny * ncx + nx]:
+                    near = True
+        if not near:
+            out[i] = eps_p[i]
+            continue
+        support2 = 4.0 * lc * lc
         num = 0.0
         den = 0.0
         for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
