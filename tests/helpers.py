@@ -112,3 +112,16 @@ def compare_runs(path_one: Path, path_two: Path, last_only: bool = False):
                 diff = np.max(np.abs(a[field] - b[field]))
                 return f"{field} differs at step {a['step']} (max abs diff {diff:.3e})"
     return None
+
+
+def assert_bad_input(result, words, out: Path | None = None) -> None:
+    """Bad input as the project promises it: exit 2, one line on stderr naming every
+    word of `words` (key, value, rule), no traceback, and nothing written at `out`."""
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    assert "Traceback" not in result.stderr
+    if out is not None:
+        assert not out.exists()

@@ -12,6 +12,7 @@ from psph.kernels.boundary import MOTION_FIXED, boundary_state
 from psph.kernels.neighbours import cell_lists
 from psph.scene import load_scene
 from psph.scenes.polylines import _nearest_on_polyline, boundary_particles
+from tests.helpers import assert_bad_input
 from tests.test_bad_input import run_cli
 
 DX = 0.02
@@ -293,13 +294,7 @@ def test_bad_polyline_exit_2_one_line_nothing_written(tmp_path, line, words):
     f = tmp_path / "bad.toml"
     f.write_text(text)
     out = tmp_path / "out"
-    r = run_cli("run", str(f), "--out", str(out))
-    assert r.returncode == 2, r.stderr
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, r.stderr
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    assert not out.exists()
+    assert_bad_input(run_cli("run", str(f), "--out", str(out)), words, out)
 
 
 def test_projection_with_polylines_is_refused():

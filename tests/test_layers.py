@@ -10,6 +10,7 @@ import pytest
 
 from psph.physics.initial import soil_positions
 from psph.scene import load_scene
+from tests.helpers import assert_bad_input
 
 SCENE = """
 name = "section"
@@ -85,13 +86,7 @@ def _run(path):
 ])
 def test_bad_profiles_exit_2_with_one_line(tmp_path, top, bottom, words):
     path = _scene(tmp_path, top, bottom)
-    r = _run(path)
-    assert r.returncode == 2, r.stderr
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, lines
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    assert not (path.parent / "out").exists()
+    assert_bad_input(_run(path), words, path.parent / "out")
 
 
 def test_a_csv_row_that_is_not_two_numbers_names_its_line(tmp_path):

@@ -23,28 +23,27 @@ def richardson(f: list[float], r: float) -> dict:
     return {"order": p, "extrapolated": f[2] + (f[2] - f[1]) / (r ** p - 1.0)}
 
 
+def _entry(key: tuple, axis: str, at: str, rows: list[dict], metric: str, r: float) -> dict:
+    """One series of three runs (coarse to fine) with its order and extrapolation."""
+    vals = [e[metric] for e in rows]
+    change = abs(vals[2] - vals[1]) / abs(vals[2]) if vals[2] else None
+    return {"scene": key[0], "scheme": key[1], "law": key[2], "in": axis, "at": at,
+            "values": vals, "finest_change": change, **richardson(vals, r)}
+
+
 def series(report: list[dict], metric: str = "runout_m") -> list[dict]:
     """Richardson over dx (r = sqrt 2) for every scene, scheme, law and dt fraction with
     three spacings measured, and over dt (r = 2) for every dx with three fractions."""
     done = [e for e in report if metric in e]
     out = []
-    keys = {(e["scene"], e["scheme"], e["law"]) for e in done}
-    for scene, scheme, law in sorted(keys):
-        group = [e for e in done if (e["scene"], e["scheme"], e["law"]) == (scene, scheme, law)]
+    for key in sorted({(e["scene"], e["scheme"], e["law"]) for e in done}):
+        group = [e for e in done if (e["scene"], e["scheme"], e["law"]) == key]
         for f in sorted({e["dt_fraction"] for e in group}, reverse=True):
             row = sorted((e for e in group if e["dt_fraction"] == f), key=lambda e: -e["dx"])
             if len(row) == 3:
-                vals = [e[metric] for e in row]
-                out.append({"scene": scene, "scheme": scheme, "law": law, "in": "dx",
-                            "at": f"dt={f:g}", "values": vals,
-                            "finest_change": abs(vals[2] - vals[1]) / abs(vals[2])
-                            if vals[2] else None, **richardson(vals, math.sqrt(2.0))})
+                out.append(_entry(key, "dx", f"dt={f:g}", row, metric, math.sqrt(2.0)))
         for dx in sorted({e["dx"] for e in group}, reverse=True):
             col = sorted((e for e in group if e["dx"] == dx), key=lambda e: -e["dt_fraction"])
             if len(col) == 3:
-                vals = [e[metric] for e in col]
-                out.append({"scene": scene, "scheme": scheme, "law": law, "in": "dt",
-                            "at": f"dx={dx:.4g}", "values": vals,
-                            "finest_change": abs(vals[2] - vals[1]) / abs(vals[2])
-                            if vals[2] else None, **richardson(vals, 2.0)})
+                out.append(_entry(key, "dt", f"dx={dx:.4g}", col, metric, 2.0))
     return out
