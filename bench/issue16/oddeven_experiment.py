@@ -55,9 +55,10 @@ Verdicts:
   (c) the pressure-momentum coupling: REFUTED. With both ends continued (uniform_top_wall)
       the coupled column stays at rest to round-off; the first step's accelerations are
       zero on every row but the bottom, interface and top ones.
-  A dry variant of the column (pressure.scheme = "none") was dropped: it grows an
-  instability in 0.05 s with either ghost rule (|v| 7 m/s, the same with the mirror), a
-  separate matter.
+  A dry variant of the column (pressure.scheme = "none") was dropped: at this scene's
+  alpha_Pi = 0.1 it blows up within 0.05 s under either ghost rule (|v| 7 m/s), the known
+  instability of a dry column at rest that the dry collapse meets with alpha_Pi = 1
+  (README, "Dry column collapse").
 """
 import sys
 
