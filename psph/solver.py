@@ -163,6 +163,7 @@ class Simulation:
 
         g = scene.gravity
         self.body = (float(g[0]), float(g[1]))
+        self.body_force = np.array(self.body)  # for the ghosts' wall-normal stress (ghosts.py)
         self.head_b = self.soil.rho_l * np.array(self.body) if scene.pressure.scheme != "none" \
             else np.zeros(2)
         # several materials (issue 16): a row per material, indexed by the particle's
@@ -283,7 +284,8 @@ class Simulation:
                              self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
                              self.drainage.update_walls(self.t), st.x, st.v, self.v_slip,
                              st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
-                             st.acc, st.key, self.head_b, self.ghost_src, self.ghost_sign)
+                             st.acc, st.key, self.head_b, self.body_force, self.ghost_src,
+                             self.ghost_sign)
             if ng >= 0:
                 st.n_ghost = ng
                 return

@@ -21,7 +21,7 @@ def fixed_base():
 def test_basal_traction_is_the_soils_strength(fixed_base):
     """Traction from the block's deceleration (momentum balance) against the mean
     Drucker-Prager strength of the bottom row at its current normal stresses, averaged
-    over 0.04-0.12 s. Measured: 8.28 kPa against 8.43 kPa (-1.7 %). Before issue 13 the
+    over 0.04-0.12 s. Measured: 8.33 kPa against 8.41 kPa (-1.0 %). Before issue 13 the
     artificial viscosity on the fixed wall's -v ghosts added a drag: 69.8 kPa against
     9.2 kPa, and the block slowed from 10 to 8.4 m/s in 0.12 s."""
     s = summarise(fixed_base)
@@ -31,14 +31,25 @@ def test_basal_traction_is_the_soils_strength(fixed_base):
 
 
 def test_no_basal_suction_from_sliding_on_a_fixed_base(fixed_base):
-    """The bottom row's mean excess p (p - p at t = 0) stays within 25 % of its initial
-    effective vertical stress, (rho_sat - rho_l) g H = 31 kPa: measured -6.3 kPa over
-    0.04-0.12 s (the free ends of a block set in the K0 state unload; at rest the row
-    mean is -7.3 kPa). Before issue 13: -126 kPa, with -1.29 MPa at the front corner."""
+    """Sliding makes no basal suction: the bottom row's mean excess p (p - p at t = 0) of
+    the sliding block is that of the same block at rest within 5 % of its initial
+    effective vertical stress, (rho_sat - rho_l) g H = 31 kPa: measured -8.5 kPa sliding
+    against -9.0 kPa at rest over 0.04-0.12 s (+0.5 kPa). Both are the K0 state unloading
+    at the block's free ends (issue 13, cause 4; `initial.equilibrate` takes it out).
+    Before issue 13: -126 kPa, with -1.29 MPa at the front corner.
+
+    This test used to bound the sliding block's mean alone, by 25 % of the 31 kPa
+    (measured -6.6 kPa). That was 1.9 kPa less negative while the fixed base's ghosts
+    mirrored sigma': the bottom row, short of (rho - rho_l) g dx of support, sank at
+    2.6 m/s^2 at t = 0 and compressed the base (+2.0 kPa in the middle of the elastic
+    block at rest at 0.12 s, +0.2 kPa since; issue 16, psph/kernels/ghosts.py), which hid
+    part of the unloading. The sliding-minus-rest difference is the same with either
+    ghost rule (+0.5 kPa)."""
     s = summarise(fixed_base)
+    rest = summarise(sliding_block([], velocity=0.0, steps=300, every=10))
     sigma_v = (0.6 * 2650 + 0.4 * 1000 - 1000) * 9.81 * 3.2
-    assert abs(s["base_excess_mean_Pa"]) < 0.25 * sigma_v
-    assert s["excess_min_Pa"] > -3.0 * sigma_v  # measured -69 kPa (was -1.29 MPa)
+    assert abs(s["base_excess_mean_Pa"] - rest["base_excess_mean_Pa"]) < 0.05 * sigma_v
+    assert s["excess_min_Pa"] > -3.0 * sigma_v  # measured -67 kPa (was -1.29 MPa)
 
 
 def test_an_elastic_block_sliding_on_a_slip_base_is_its_block_at_rest():

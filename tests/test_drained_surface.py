@@ -156,7 +156,7 @@ def test_drained_wall_ghosts_carry_minus_p(drained):
                      np.array([1.0, 1.0]), np.array([True, False]),
                      np.array([drained, False]), x, v, v_slip, z((cap, 4)), p, p_prev,
                      np.full(cap, 0.4), np.ones(cap), np.ones(cap), np.ones(cap), acc,
-                     np.arange(cap, dtype=float), head_b, src, sign)
+                     np.arange(cap, dtype=float), head_b, np.zeros(2), src, sign)
     assert ng == 4  # particle 0: bottom, side, corner; particle 1: bottom
     g = np.arange(n, n + ng)
     bottom = np.isclose(x[g, 1], -0.05) & (x[g, 0] > 0)

@@ -132,11 +132,17 @@ def _row_pairs(a, x0, y0):
 
 def test_layered_column_stays_at_its_overburden(tmp_path):
     """After a short run at rest the K0 state and p still follow the layered overburden
-    within 2 % (of the base values). sigma'_v carries the lattice's odd-even mode, which
-    grows with depth in a column of one density as well (measured at 0.05 s: 1.5 % of the
-    base stress there, 2.3 % here, the dense layer being the heavier), so sigma'_v is
-    compared as the mean of vertically adjacent particles (measured 0.7 %) and raw within
-    3 %."""
+    within 2 % (of the base values), raw sigma'_v particle by particle (measured at 0.05 s:
+    0.87 %, on the top row) and the mean of vertically adjacent particles (0.65 %).
+
+    What is left is the lattice's odd-even (zig-zag) mode of sigma' that the density jump
+    at y = 1 m excites: Eq. (26) averages the stress gradient over 2h across the jump but
+    divides by the particle's own rho, so the discrete equilibrium holds a zig-zag step of
+    0.65 % of the base stress there (0.84 % at most, above the jump), plus the cut support
+    of the top row (0.31 % in a column of one density). The fixed bottom excited the mode
+    too, 2.3 % raw here and 1.5 % in a column of one density, while its ghosts mirrored
+    sigma'; they now continue the total stress with its weight (psph/kernels/ghosts.py;
+    bench/issue16/oddeven_experiment.py, one variant per candidate exciter)."""
     from mpi4py import MPI
 
     scene = load_scene(str(_write(tmp_path, LAYERED)))
@@ -148,11 +154,11 @@ def test_layered_column_stays_at_its_overburden(tmp_path):
     base = np.max(np.abs(sv_ref))
     assert np.max(np.abs(s["v"])) < 1e-4
     err = np.abs(_row_pairs(s["stress"][:, 1], x0, y0) - _row_pairs(sv_ref, x0, y0))
-    assert np.max(err) < 0.01 * base  # measured 0.7 %
-    assert np.max(np.abs(s["stress"][:, 1] - sv_ref)) < 0.03 * base
-    assert np.max(np.abs(s["p"] - p_ref)) < 0.005 * np.max(p_ref)  # measured 0.14 %
+    assert np.max(err) < 0.01 * base  # measured 0.65 %
+    assert np.max(np.abs(s["stress"][:, 1] - sv_ref)) < 0.02 * base  # measured 0.87 %
+    assert np.max(np.abs(s["p"] - p_ref)) < 0.005 * np.max(p_ref)  # measured 0.047 %
     ratio = s["stress"][:, 0] / s["stress"][:, 1]
-    assert np.all(np.abs(ratio - 0.5) < 0.02 * 0.5)
+    assert np.all(np.abs(ratio - 0.5) < 0.02 * 0.5)  # measured 0.40 %
 
 
 STRAIN = """

@@ -31,7 +31,7 @@ def _block_on_wall(fixed: bool, velocity: tuple[float, float]):
     ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([0.0]),
                      np.array([1.0]), np.array([fixed]), np.array([False]), x, v, v_slip,
                      stress, p, p_prev, poro, vol, rho, perm, acc, key, np.zeros(2),
-                     np.zeros(cap, np.int64), np.ones(cap))
+                     np.zeros(2), np.zeros(cap, np.int64), np.ones(cap))
     assert ng > 0
     m = n + ng
     sums = sums_for(x[:m], H, vol[:m], v=v[:m], poro=poro[:m], n_owned=n, v_slip=v_slip[:m],
@@ -74,3 +74,42 @@ def test_free_slip_ghosts_need_no_stretching_correction():
     assert not sums[:, 25:29].any()
     sums, _ = _block_on_wall(True, (5.0, -1.0))
     assert sums[:, 25:29].any()
+
+
+@pytest.mark.parametrize("drained", [False, True])
+def test_ghosts_continue_a_geostatic_stress_linearly(drained):
+    """Under gravity the wall-normal total stress sigma'_yy - p of a bottom wall's ghost is
+    the linear continuation of the real particles' (gradient rho g, the weight of the soil
+    between them), on an impermeable wall (p continued hydrostatically) and on a drained
+    one (p mirrored through 0): the kink of a plain mirror excited the odd-even mode of
+    sigma' (issue 16, bench/issue16/oddeven_experiment.py). sigma'_xx and sigma'_zz stay
+    mirrored, the shear stress as before."""
+    g, rho, rho_l = 9.81, 2000.0, 1000.0
+    gx = (np.arange(4) + 0.5) * DX
+    gy = (np.arange(4) + 0.5) * DX
+    x_real = np.array(np.meshgrid(gx, gy)).reshape(2, -1).T
+    n, cap = len(x_real), 64
+    z = np.zeros
+    x = z((cap, 2))
+    x[:n] = x_real
+    y = x_real[:, 1]
+    total = -rho * g * (2.0 - y)  # sigma_yy, linear in y with slope rho g
+    p = z(cap)
+    p[:n] = 5000.0 * y if drained else rho_l * g * (2.0 - y)
+    stress = z((cap, 4))
+    stress[:n, 1] = total + p[:n]
+    stress[:n, 0] = stress[:n, 2] = 0.5 * stress[:n, 1]
+    stress[:n, 3] = 10.0 * y
+    src, sign = np.zeros(cap, np.int64), np.ones(cap)
+    ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([0.0]),
+                     np.array([1.0]), np.array([True]), np.array([drained]), x, z((cap, 2)),
+                     z((cap, 2)), stress, p, p.copy(), np.full(cap, 0.4), np.ones(cap),
+                     np.full(cap, rho), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float),
+                     np.array([0.0, -rho_l * g]), np.array([0.0, -g]), src, sign)
+    gh = np.arange(n, n + ng)
+    assert ng == 12 and np.all(x[gh, 1] < 0.0)  # the rows within 2h = 2.6 dx
+    yg = x[gh, 1]
+    assert np.allclose(stress[gh, 1] - p[gh], -rho * g * (2.0 - yg), rtol=1e-12)
+    assert np.allclose(stress[gh, 0], stress[src[gh], 0])
+    assert np.allclose(stress[gh, 2], stress[src[gh], 2])
+    assert np.allclose(stress[gh, 3], stress[src[gh], 3])

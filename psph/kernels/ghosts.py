@@ -6,12 +6,24 @@ mirrored; velocity and acceleration with the normal component reversed (free sli
 reversed (fixed, no slip), and `v_slip` with the free-slip mirror on every wall (the
 stretching rates take it, see `interactions.py`); effective stress mirrored (shear
 component reversed on a free-slip wall, kept on a fixed one so that the wall resists
-tangential motion); porosity, volume, density and permeability copied; pore pressure
-copied plus the hydrostatic difference rho_l b.(x_ghost - x_real), so that the total
-head p + psi of Eq. (25) is mirrored and a wall is impermeable also under gravity; on a
-drained wall (`wall_drained`) the pore pressure is mirrored antisymmetrically, p_ghost =
--p_real, so that p = 0 on the wall plane itself (issue 14, item 3; `images.py`).
+tangential motion), except for its wall-normal component (below); porosity, volume,
+density and permeability copied; pore pressure copied plus the hydrostatic difference
+rho_l b.(x_ghost - x_real), so that the total head p + psi of Eq. (25) is mirrored and a
+wall is impermeable also under gravity; on a drained wall (`wall_drained`) the pore
+pressure is mirrored antisymmetrically, p_ghost = -p_real, so that p = 0 on the wall
+plane itself (issue 14, item 3; `images.py`).
 Particles near two walls of different axes also get a corner ghost mirrored across both.
+
+The wall-normal total stress sigma_nn = sigma'_nn - p (Eq. 2) of a ghost is the real
+particle's plus the weight of the soil between them, -rho_j b.(x_ghost - x_real): the
+continuation of the equilibrium gradient d sigma_nn / dn = -rho b_n (Eq. 6 at rest), so
+that a geostatic stress, linear in depth, stays linear across the wall and the pair sum of
+Eq. (26) balances the weight of the rows next to the wall. sigma'_nn follows by Eq. (2)
+with the ghost's own p. A plain mirror (sigma'_nn copied) puts a kink in it at the wall:
+the bottom row of a column at rest then lacks (rho - rho_l) g dx of support, sinks by
+2.7 m/s^2 at t = 0, and the column settles into the lattice's odd-even (zig-zag) mode of
+sigma', which the pair-symmetric Eq. (26) cannot see and so never damps (1.5 % of the base
+stress in a column of one density; issue 16, `bench/issue16/oddeven_experiment.py`).
 """
 
 import numba as nb
@@ -19,7 +31,7 @@ import numba as nb
 
 @nb.njit(cache=True)
 def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev, poro, vol,
-            rho, perm, acc, key, head_b):
+            rho, perm, acc, key, head_b, body):
     x[dst, 0] = x[src, 0]
     x[dst, 1] = x[src, 1]
     x[dst, axis] = 2.0 * pos - x[src, axis]
@@ -44,6 +56,10 @@ def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev
         dp = head_b[0] * (x[dst, 0] - x[src, 0]) + head_b[1] * (x[dst, 1] - x[src, 1])
         p[dst] = p[src] + dp
         p_prev[dst] = p_prev[src] + dp
+    # the wall-normal total stress continued with its equilibrium gradient -rho b (module
+    # docstring); the effective one with the ghost's pore pressure (Eq. 2)
+    weight = -rho[src] * body[axis] * (x[dst, axis] - x[src, axis])
+    stress[dst, axis] += weight + p[dst] - p[src]
     poro[dst] = poro[src]
     vol[dst] = vol[src]
     rho[dst] = rho[src]
@@ -54,11 +70,13 @@ def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev
 @nb.njit(cache=True)
 def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
                 wall_drained, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key,
-                head_b, src, src_sign):
+                head_b, body, src, src_sign):
     """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
     or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
     per wall / corner, so the neighbour order is the same on any number of ranks.
-    head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift.
+    head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift (zero
+    in a scene without pore pressure); body: the body force b (m/s^2), for the weight
+    between a particle and its ghost in the wall-normal stress.
     v_slip: rows 0..n_real-1 get v; ghosts get the free-slip mirror (v itself may be
     passed when no wall is fixed).
     src: src[g] = the real row a ghost g mirrors (corner ghosts too), for fields that are
@@ -78,7 +96,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
             if g >= cap:
                 return -1
             _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], wall_drained[w], x, v,
-                    v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
+                    v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b, body)
             key[g] = key[j] + key_stride * (1 + w)
             src[g] = j
             src_sign[g] = -1.0 if wall_drained[w] else 1.0
@@ -93,7 +111,8 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                     return -1
                 gg = g - 1
                 _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], wall_drained[w2],
-                        x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b)
+                        x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b,
+                        body)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 src[g] = j
                 src_sign[g] = src_sign[gg] * (-1.0 if wall_drained[w2] else 1.0)
