@@ -7,7 +7,8 @@
 For each dilatancy angle: the run-out at 0.6 s and at the end, the largest and the most
 negative excess pore pressure over all snapshots and the highest 99th percentile of
 |excess| (excess: p minus the hydrostatic pressure of the water table at the particle's
-current position, psph/verify/pressure.py), the checkerboard index of p' in the debris
+current position, psph/verify/pressure.py), the median excess in the shear band
+(eps_p > 0.05) at the end, the checkerboard index of p' in the debris
 at the end, and the back scarp at the end. Writes bench/out/collapse_table.json.
 """
 
@@ -15,13 +16,15 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).parent.parent
 sys.path.insert(0, str(ROOT))
 
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
 from psph.verify.collapse import collapse_metrics  # noqa: E402
-from psph.verify.pressure import pressure_quality  # noqa: E402
+from psph.verify.pressure import excess_pressure, pressure_quality  # noqa: E402
 
 CASES = {"-5": "collapse_saturated_psi-5", "0": "collapse_saturated_psi0",
          "2.5": "collapse_saturated_psi2.5"}
@@ -37,7 +40,10 @@ def case_row(run: Path) -> dict:
     end = snaps[-1]
     m_at = collapse_metrics(at["x"], x0, dx)
     m_end = collapse_metrics(end["x"], x0, dx)
-    return {"runout_0.6_m": m_at["runout_m"], "t_end_s": end["time"],
+    band = end["eps_p"] > 0.05
+    band_median = float(np.median(excess_pressure(end, scene)[band])) if band.any() else 0.0
+    return {"band_excess_median_end_kPa": band_median / 1e3,
+            "runout_0.6_m": m_at["runout_m"], "t_end_s": end["time"],
             "runout_end_m": m_end["runout_m"], "excess_max_kPa": q["excess_max_Pa"] / 1e3,
             "excess_min_kPa": q["excess_min_Pa"] / 1e3,
             "abs_excess_p99_kPa": q["abs_excess_p99_max_Pa"] / 1e3,
@@ -52,12 +58,14 @@ def main() -> None:
         if (run / "particles.h5").is_file():
             rows[psi] = case_row(run)
     print(f"{'psi':>5s} {'run-out 0.6 s':>13s} {'run-out end':>11s} {'max excess kPa':>14s} "
-          f"{'min excess kPa':>14s} {'p99 |excess|':>12s} {'cb p_eff':>8s} {'back scarp':>10s}")
+          f"{'min excess kPa':>14s} {'p99 |excess|':>12s} {'band median':>11s} {'cb p_eff':>8s} "
+          f"{'back scarp':>10s}")
     for psi, r in rows.items():
         cb = r["checkerboard_p_eff_debris"]
         print(f"{psi:>5s} {r['runout_0.6_m']:13.2f} {r['runout_end_m']:11.2f} "
               f"{r['excess_max_kPa']:14.1f} {r['excess_min_kPa']:14.1f} "
-              f"{r['abs_excess_p99_kPa']:12.1f} {'-' if cb is None else f'{cb:.3f}':>8s} "
+              f"{r['abs_excess_p99_kPa']:12.1f} {r['band_excess_median_end_kPa']:11.1f} "
+              f"{'-' if cb is None else f'{cb:.3f}':>8s} "
               f"{r['back_scarp_end_m']:10.2f}")
     out = ROOT / "bench" / "out"
     out.mkdir(exist_ok=True)
