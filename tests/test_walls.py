@@ -113,3 +113,29 @@ def test_ghosts_continue_a_geostatic_stress_linearly(drained):
     assert np.allclose(stress[gh, 0], stress[src[gh], 0])
     assert np.allclose(stress[gh, 2], stress[src[gh], 2])
     assert np.allclose(stress[gh, 3], stress[src[gh], 3])
+
+
+def test_a_lid_mirrors_the_effective_stress():
+    """A top wall does not carry the soil (gravity points away from it): its ghosts
+    mirror sigma' as before, so a lid does not hold the soil up with a tension."""
+    g, rho = 9.81, 2000.0
+    gx = (np.arange(4) + 0.5) * DX
+    gy = 1.0 - (np.arange(4) + 0.5) * DX  # the rows under a lid at y = 1
+    x_real = np.array(np.meshgrid(gx, gy)).reshape(2, -1).T
+    n, cap = len(x_real), 64
+    z = np.zeros
+    x = z((cap, 2))
+    x[:n] = x_real
+    stress = z((cap, 4))
+    stress[:n, 1] = -rho * g * (1.0 - x_real[:, 1])
+    stress[:n, 0] = stress[:n, 2] = 0.5 * stress[:n, 1]
+    src, sign = np.zeros(cap, np.int64), np.ones(cap)
+    p = z(cap)
+    ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([1.0]),
+                     np.array([-1.0]), np.array([True]), np.array([False]), x, z((cap, 2)),
+                     z((cap, 2)), stress, p, p.copy(), np.full(cap, 0.4), np.ones(cap),
+                     np.full(cap, rho), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float),
+                     np.zeros(2), np.array([0.0, -g]), src, sign)
+    gh = np.arange(n, n + ng)
+    assert ng > 0 and np.all(x[gh, 1] > 1.0)
+    assert np.array_equal(stress[gh, :3], stress[src[gh], :3])

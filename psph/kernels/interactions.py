@@ -236,7 +236,8 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
 
     Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
     v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure (Eq. 25)
-    rates take the new velocity, the staggered order of the leapfrog Eq. (27).
+    rates take the new velocity, the staggered order of the leapfrog Eq. (27). And by the
+    pressure projection after its velocity correction (`Simulation._project`).
     """
     for i in range(n_owned):
         for c in range(4, 8):

@@ -33,7 +33,8 @@ def projection_rhs(n_owned: int, sums: np.ndarray, p: np.ndarray, perm: np.ndarr
                    rhs: np.ndarray) -> None:
     """storage_i = n_i / (K_l dt) and rhs_i = V_i (lap_i / gamma_l - div v*_i) with lap the
     corrected Darcy term of Eq. (23) at p^n (as in explicit Eq. 25) and div v* from the
-    velocity sums of the kicked velocity (Gv + Gs with M^-1, Eq. 22)."""
+    velocity sums (Gv + Gs with M^-1, Eq. 22) of the kicked velocity (symplectic step) or
+    of v^n, the step's sweep (the one-sweep step)."""
     for i in range(n_owned):
         s = sums[i]
         m00, m01, m10, m11 = _inverse_moment(s)
