@@ -115,9 +115,10 @@ def test_ghosts_continue_a_geostatic_stress_linearly(drained):
     assert np.allclose(stress[gh, 3], stress[src[gh], 3])
 
 
-def test_a_lid_mirrors_the_effective_stress():
+def test_a_lid_takes_no_weight():
     """A top wall does not carry the soil (gravity points away from it): its ghosts
-    mirror sigma' as before, so a lid does not hold the soil up with a tension."""
+    mirror the stress (no pore pressure here) without the weight, so a lid does not hold
+    the soil up with a tension."""
     g, rho = 9.81, 2000.0
     gx = (np.arange(4) + 0.5) * DX
     gy = 1.0 - (np.arange(4) + 0.5) * DX  # the rows under a lid at y = 1

@@ -18,10 +18,10 @@ The wall-normal total stress sigma_nn = sigma'_nn - p (Eq. 2) of a ghost is the 
 particle's plus the weight of the soil between them, -rho_j b.(x_ghost - x_real): the
 continuation of the equilibrium gradient d sigma_nn / dn = -rho b_n (Eq. 6 at rest), so
 that a geostatic stress, linear in depth, stays linear across the wall and the pair sum of
-Eq. (26) balances the weight of the rows next to the wall. Only on a wall that carries
-the soil, the body force pointing into it (a floor); on a lid or a wall the body force
-points away from, sigma' is mirrored as before (the continuation would be a tension that
-holds the soil up). sigma'_nn follows by Eq. (2)
+Eq. (26) balances the weight of the rows next to the wall. The weight only on a wall
+that carries the soil, the body force pointing into it (a floor); on a lid, or a wall the
+body force points away from, the total stress is mirrored (the continuation would be a
+tension that holds the soil up). sigma'_nn follows by Eq. (2)
 with the ghost's own p. A plain mirror (sigma'_nn copied) puts a kink in it at the wall:
 the bottom row of a column at rest then lacks (rho - rho_l) g dx of support, sinks by
 2.7 m/s^2 at t = 0, and the column settles into the lattice's odd-even (zig-zag) mode of
@@ -60,12 +60,11 @@ def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev
         p[dst] = p[src] + dp
         p_prev[dst] = p_prev[src] + dp
     # the wall-normal total stress continued with its equilibrium gradient -rho b (module
-    # docstring); the effective one with the ghost's pore pressure (Eq. 2). Only where
-    # the wall carries the soil (the body force points into it: weight < 0): under a lid
-    # the continuation would be tension that holds the soil up against gravity
-    weight = -rho[src] * body[axis] * (x[dst, axis] - x[src, axis])
-    if weight < 0.0:
-        stress[dst, axis] += weight + p[dst] - p[src]
+    # docstring); the effective one with the ghost's pore pressure (Eq. 2). The weight
+    # only where the wall carries the soil (the body force points into it: weight < 0):
+    # under a lid the continuation would be a tension that holds the soil up
+    weight = min(-rho[src] * body[axis] * (x[dst, axis] - x[src, axis]), 0.0)
+    stress[dst, axis] += weight + p[dst] - p[src]
     poro[dst] = poro[src]
     vol[dst] = vol[src]
     rho[dst] = rho[src]
