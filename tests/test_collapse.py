@@ -60,7 +60,7 @@ def test_collapse_metric_series_in_summary(collapse):
     assert work[-1] == pytest.approx(np.sum(last["plastic_work"] * last["vol"]), rel=1e-12)
     assert m["plastic_work_J_per_m"] == work[-1]
     assert series["runout_m"][-1] == m["runout_m"] and series["toe_m"][-1] == m["toe_m"]
-    assert series["back_scarp_m"] == m["back_scarp_history_m"]
+    assert series["back_scarp_m"][-1] == m["back_scarp_m"]
     assert 0.0 <= m["runout_spread_m"] < 0.5 * m["toe_m"]
     assert m["slide_time_resolution_s"] == pytest.approx(0.1, rel=1e-3)
     assert "excess_p_peak_Pa" not in m  # a dry run has no pore pressure

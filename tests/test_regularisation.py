@@ -97,8 +97,7 @@ def test_softening_band_energy_is_objective_with_regularisation_only():
     reg = [softening_band(dy, 0.03, 2.0) for dy in (0.01, 0.01 / 1.5)]
     assert local[1] / local[0] < 0.8  # follows dy
     g = [r.dissipated for r in reg]
-    assert abs(g[1] - g[0]) < 0.10 * g[0]
-    assert abs(g[1] - g[0]) < 0.01 * g[0]  # as measured: 0.14 %
+    assert abs(g[1] - g[0]) < 0.01 * g[0]  # as measured: 0.14 % (the bar: 10 %)
     assert g[0] > 3 * local[0]  # the band is wider than a particle row
     assert all(abs(r.band_width - 0.02) < 1e-9 for r in reg)
 
