@@ -43,6 +43,9 @@ class Plasticity(_Model):
     eta: Annotated[float, Field(ge=0.0)] = 0.0  # softening rate of phi and c, Eq. (17)-(18)
     s_f: Annotated[float, Field(ge=0.0)] = 0.0  # decay rate of dilation, Eq. (19)
     regularisation: Regularisation | None = None  # None: the local law
+    # tension cut-off: the largest mean effective stress sigma'_m (Pa, tension positive)
+    # the soil carries (issue 13); None: the apex c cot(phi) of Eq. (14), the paper's law
+    tension_cutoff: Annotated[float, Field(ge=0.0)] | None = None
 
 
 class Material(_Model):

@@ -159,3 +159,17 @@ def test_contractive_softening_shear_liquefies_to_the_apex():
     assert max(err.values()) < TOL, err
     assert sph["p"][-1] > SIGMA0 and sph["mean_eff"][-1] > 0.0
     assert np.max(np.abs(sph["sqrt_j2"][-3:])) < 1e-6 * SIGMA0
+
+
+def test_tension_cutoff_caps_p_at_the_total_stress():
+    """The contractive shear above with `plasticity.tension_cutoff = 0` (issue 13): p rises
+    until sigma'_m reaches zero and stays there, so p ends at the total mean stress
+    |sigma'0| and not above it by the apex tension (110.8 kPa above). measured: p 100.000
+    kPa, sigma'_m 0 to 1e-10 Pa, SPH against the reference 0.8 % of the peak."""
+    params = {**SOFTENING, "c": 7.5e3, "rate": 5e-2, "tension": 0.0}
+    ref = reference_element("shear", -5.0, drained=False, **params)
+    sph = sph_element("shear", -5.0, drained=False, **params)
+    err = _errors(sph, ref, ("p", "mean_eff", "sqrt_j2"))
+    assert max(err.values()) < TOL, err
+    assert np.max(sph["mean_eff"]) <= 1e-6 * SIGMA0
+    assert sph["p"][-1] == pytest.approx(SIGMA0, rel=1e-6)

@@ -137,3 +137,16 @@ def test_artificial_stress_rotates_with_the_stress():
     c, s = math.cos(th), math.sin(th)
     r = _as(t * c * c, t * s * s, t * s * c)
     assert r == pytest.approx([-0.5 * t * c * c, -0.5 * t * s * s, -0.5 * t * s * c])
+
+
+def test_tension_cutoff_moves_the_mean_stress_and_keeps_the_deviator():
+    """An elastic trial state (f < 0) with sigma'_m = 5 kPa above a cut-off of 1 kPa: the
+    mean moves to the cut-off, the deviator stays, no plastic strain; without the cut-off
+    (the default) the state is left alone, below the apex c cot(phi) = 8.7 kPa."""
+    s = (6e3, 4e3, 5e3, 0.5e3)
+    assert f_of(s, PHI, C) < 0
+    assert ret(s)[:5] == (*s, 0.0)
+    out = dp_return(*s, 0.0, K, G, PHI, PHI, C, C, 0.0, 0.0, 0.0, 1e3)
+    assert sum(out[:3]) / 3 == pytest.approx(1e3, rel=1e-12)
+    assert np.allclose(np.subtract(out[:3], 1e3), np.subtract(s[:3], 5e3), atol=1e-9)
+    assert out[3] == s[3] and out[5] == 0.0 and out[6] == 0.0

@@ -7,6 +7,10 @@ Eq. (17)-(19) in the equivalent plastic strain. The return mapping is the semi-i
 one of Bui et al. (2008) (the paper's ref. [3]): one plastic corrector with the multiplier
 of Eq. (13), then the tension-cracking treatment at the apex and the scaling back of the
 deviator onto the surface, so that no state ends outside it and none is NaN.
+An optional tension cut-off (`plasticity.tension_cutoff`, issue 13) caps the mean
+effective stress at t below the apex c cot(phi) with the same shift: without it a
+contractive soil (psi < 0) at low confinement flows undrained until sigma'_m is tensile
+up to the apex and p exceeds the total stress (README, "Pore pressure through failure").
 The strain that softens Eq. (17)-(19) is the particle's own eps_p (the local law) or, with
 `plasticity.regularisation`, the over-non-local strain of `nonlocal_strain.py` (issue 17);
 `dp_return` returns the local increment either way.
@@ -46,14 +50,16 @@ def _invariants(sxx, syy, szz, sxy):
 
 @nb.njit(cache=True)
 def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
-              s_f):
+              s_f, tension=math.inf):
     """Return the trial stress to the Drucker-Prager surface.
 
     Returns (sxx, syy, szz, sxy, d_lambda, d_eps_p, d_w): the corrected stress, the
     plastic multiplier of Eq. (13), the increment of the equivalent plastic strain
     d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain = d_lambda / sqrt(3),
     and the plastic work increment d_w = sigma : d eps_p (J/m^3, `plastic_work`).
-    A trial state with f <= 0 is returned unchanged (d_lambda = 0, d_w = 0).
+    A trial state with f <= 0 and sigma'_m <= tension is returned unchanged (d_lambda = 0,
+    d_w = 0); tension (Pa): the tension cut-off of the mean effective stress, inf: none
+    (the apex c cot(phi) of Eq. 14 bounds it).
 
     Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
     with the sign that keeps f = 0 to first order after the update (softening makes
@@ -65,10 +71,10 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
     i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy)
     rj2 = math.sqrt(j2)
     f = xi * i1 + rj2 - kap
-    if not f > 0.0:
+    if not f > 0.0 and not i1 > 3.0 * tension:
         return sxx, syy, szz, sxy, 0.0, 0.0, 0.0
     d_lam = 0.0
-    if rj2 > 1e-12 * (abs(i1) + kap + 1.0):
+    if f > 0.0 and rj2 > 1e-12 * (abs(i1) + kap + 1.0):
         # df/d eps_p of the softened surface: d(xi)/d eps I1 - d(kappa)/d eps
         decay = math.exp(-eta * eps_p)
         dphi = -eta * (phi_p - phi_r) * decay
@@ -102,6 +108,13 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
         syy -= shift
         szz -= shift
         i1 = kap / xi
+    # tension cut-off: sigma'_m at most `tension`, the same shift
+    if i1 > 3.0 * tension:
+        shift = (i1 - 3.0 * tension) / 3.0
+        sxx -= shift
+        syy -= shift
+        szz -= shift
+        i1 = 3.0 * tension
     # scaling back: a deviator still outside the surface is scaled onto it
     room = kap - xi * i1
     rj2 = math.sqrt(j2)

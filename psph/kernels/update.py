@@ -31,7 +31,8 @@ MAT_PLASTIC = 7  # 1: Drucker-Prager, 0: elastic
 MAT_DP = 8  # 7 columns: phi_p, phi_r, c_p, c_r, psi_0, eta, s_f (Eq. 17-19, radians)
 MAT_NL_LENGTH = MAT_DP + 7  # l_c of the non-local softening strain (m); 0: local
 MAT_NL_M = MAT_DP + 8  # its over-non-local weight m (psph/kernels/nonlocal_strain.py)
-MAT_COLUMNS = MAT_DP + 9
+MAT_TENSION = MAT_DP + 9  # tension cut-off of sigma'_m (Pa); inf: none (`dp_return`)
+MAT_COLUMNS = MAT_DP + 10
 
 
 @nb.njit(cache=True, inline="always")
@@ -246,7 +247,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
             d = MAT_DP
             r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_soft[i],
                           lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1], row[d + 2],
-                          row[d + 3], row[d + 4], row[d + 5], row[d + 6])
+                          row[d + 3], row[d + 4], row[d + 5], row[d + 6], row[MAT_TENSION])
             stress[i, 0] = r[0]
             stress[i, 1] = r[1]
             stress[i, 2] = r[2]

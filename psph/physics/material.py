@@ -18,6 +18,7 @@ from psph.kernels.update import (
     MAT_PLASTIC,
     MAT_RHO_S,
     MAT_SHEAR,
+    MAT_TENSION,
 )
 
 
@@ -84,13 +85,21 @@ def soil_from_scene(scene, material=None) -> ElasticSoil:
                        gamma_l=m.rho_l * m.g_ref, porosity=m.porosity, conductivity=m.k)
 
 
+def tension_cutoff(material) -> float:
+    """The cap on the mean effective stress (Pa, tension positive) of `dp_return`: the
+    material's `plasticity.tension_cutoff`, inf without one (the apex of Eq. 14)."""
+    pl = material.plasticity
+    return math.inf if pl is None or pl.tension_cutoff is None else pl.tension_cutoff
+
+
 def material_table(scene) -> np.ndarray:
     """(n_materials, MAT_COLUMNS) float64: the row of each material, indexed by the
     particle field `material`, in the column layout of psph/kernels/update.py (MAT_*):
     Lame constants and 3K = 3 lambda + 2 mu (Eq. 11), rho_s (Eq. 24 with Eq. 8), k and
     C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
     (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19), with l_c and m of its
-    non-local softening strain (0: local; issue 17). The values are the same
+    non-local softening strain (0: local; issue 17) and its tension cut-off (inf: none;
+    issue 13). The values are the same
     floats as the scalars the kernels took before several materials (issue 16)."""
     mats = scene.material_list
     table = np.zeros((len(mats), MAT_COLUMNS))
@@ -105,6 +114,7 @@ def material_table(scene) -> np.ndarray:
         table[i, MAT_N_MIN] = m.porosity_min
         table[i, MAT_PLASTIC] = 1.0 if m.model == "drucker_prager" else 0.0
         table[i, MAT_DP:MAT_DP + 7] = plasticity_parameters(scene, m)
+        table[i, MAT_TENSION] = tension_cutoff(m)
         reg = m.plasticity.regularisation if m.plasticity is not None else None
         if reg is not None:
             table[i, MAT_NL_LENGTH] = reg.length
@@ -129,10 +139,10 @@ def fastest_undrained(scene) -> float:
 
 def material_row(lam: float = 0.0, shear: float = 0.0, rho_s: float = 0.0, k: float = 0.0,
                  c_k: float = 0.0, n_min: float = 0.0, dp: np.ndarray | None = None,
-                 bulk3: float | None = None) -> np.ndarray:
+                 bulk3: float | None = None, tension: float = math.inf) -> np.ndarray:
     """A one-material table (1, MAT_COLUMNS) from constants, for kernels called outside a
     run (the element tests, unit tests); dp: the 7 Drucker-Prager parameters or None
-    (elastic); bulk3 default 3 lambda + 2 mu."""
+    (elastic); bulk3 default 3 lambda + 2 mu; tension: the cut-off of sigma'_m."""
     row = np.zeros((1, MAT_COLUMNS))
     row[0, [MAT_LAM, MAT_SHEAR, MAT_RHO_S, MAT_K, MAT_C_K, MAT_N_MIN]] = \
         (lam, shear, rho_s, k, c_k, n_min)
@@ -140,4 +150,5 @@ def material_row(lam: float = 0.0, shear: float = 0.0, rho_s: float = 0.0, k: fl
     if dp is not None:
         row[0, MAT_PLASTIC] = 1.0
         row[0, MAT_DP:MAT_DP + 7] = dp
+    row[0, MAT_TENSION] = tension
     return row

@@ -74,6 +74,7 @@ class ElementParams:
     c_r: float | None = None  # None: = c
     eta: float = 0.0
     s_f: float = 0.0
+    tension: float = math.inf  # tension cut-off of sigma'_m (Pa); inf: the apex (Eq. 14)
     sigma0: float = -100e3  # isotropic effective stress (Pa), tension positive
     rate: float | None = None  # r or shear rate (1/s); None: DEFAULT_RATE[path]
     dt: float = 0.01
@@ -225,7 +226,8 @@ def reference_element(path: str, psi_deg: float, drained: bool, moment: Moment =
         grad = velocity_gradient(path, rate, e)
         trial = jaumann_elastic(stress, plain_gradient(grad, mom), par.soil.lam, par.soil.shear,
                                 par.dt)
-        r = dp_return(*trial, eps_p, par.soil.lam + 2 * par.soil.shear / 3, par.soil.shear, *dp)
+        r = dp_return(*trial, eps_p, par.soil.lam + 2 * par.soil.shear / 3, par.soil.shear, *dp,
+                      par.tension)
         div = grad[0, 0] + grad[1, 1]
         p_new = 0.0 if drained else p - par.dt * par.K_l / n * div
         new = (np.array(r[:4]), eps_p + r[5], n + par.dt * (1 - n) * div, p_new)
@@ -256,7 +258,7 @@ class _SphBlock:
         self.correct_strain = correct_strain
         self.dp = par.plasticity(psi_deg)
         self.mat = material_row(par.soil.lam, par.soil.shear, par.rho_s, par.perm,
-                                dp=self.dp)
+                                dp=self.dp, tension=par.tension)
         self.h = par.h_factor * par.dx
         x, self.centre = _lattice(par)
         n = self.n = len(x)
