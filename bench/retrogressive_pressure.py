@@ -16,7 +16,9 @@ For each run directory:
   percentile at the slide and just before the next one (or at the end), and the same
   statistics later over the particles that were debris at the slide (the debris grows
   between slides with freshly sheared soil, whose excess is new, not undissipated):
-  Fig. 20 shows it dissipating.
+  Fig. 20 shows it dissipating; with the same particles' median mean effective stress
+  p' (compression positive) at the slide and later, whose rise is the consolidation of
+  Fig. 21 (negative: effective tension, README cause 13).
 
 Prints a table and writes bench/out/retrogressive_pressure.json.
 """
@@ -33,7 +35,11 @@ sys.path.insert(0, str(ROOT))
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
 from psph.verify.collapse import slide_history  # noqa: E402
-from psph.verify.pressure import DEBRIS_DX, excess_pressure  # noqa: E402
+from psph.verify.pressure import (  # noqa: E402
+    DEBRIS_DX,
+    excess_pressure,
+    mean_effective_stress,
+)
 
 BAND_EPS = 0.05  # equivalent plastic strain of the shear zone
 BASE_ZONE_M = 4.0  # the basal shear zone starts in the bottom 4 m
@@ -94,10 +100,13 @@ def run_checks(out: Path) -> dict:
                           **_median_p95(ex[debris])})
             if which == 0:
                 ids_at = s["id"][debris]
-            else:  # the same particles later: their own dissipation, without the
-                # freshly sheared soil that joined the debris since
-                same = np.isin(s["id"], ids_at)
-                stats[-1]["same_particles"] = _median_p95(ex[same])
+            # the same particles later: their own dissipation, without the freshly
+            # sheared soil that joined the debris since
+            same = np.isin(s["id"], ids_at)
+            stats[-1]["same_particles"] = {
+                **_median_p95(ex[same]),
+                "mean_effective_median_Pa": float(np.median(
+                    mean_effective_stress(s["stress"][same]))) if same.any() else None}
         decay.append({"slide": k + 1, "at": stats[0], "later": stats[1]})
     result["debris_after_slides"] = decay
     return result
@@ -121,8 +130,9 @@ def main(argv: list[str]) -> int:
               f"{r['p_above_sigma_v_base']} particle-snapshots above it)")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
+              f"   {'pe_at':>7s} {'pe_later':>8s}"
               "  (excess p of the debris, kPa; 'same': the particles of the debris at the "
-              "slide, later)")
+              "slide, later; pe: their median p' at the slide and later, kPa)")
         for d in r["debris_after_slides"]:
             a, b = d["at"], d["later"]
 
@@ -132,7 +142,9 @@ def main(argv: list[str]) -> int:
                   f"{f(a['median_Pa']):>8s} {f(a['p95_Pa']):>8s}   {b['time_s']:7.1f} "
                   f"{f(b['median_Pa']):>8s} {f(b['p95_Pa']):>8s}   "
                   f"{f(b['same_particles']['median_Pa']):>8s} "
-                  f"{f(b['same_particles']['p95_Pa']):>8s}")
+                  f"{f(b['same_particles']['p95_Pa']):>8s}   "
+                  f"{f(a['same_particles']['mean_effective_median_Pa']):>7s} "
+                  f"{f(b['same_particles']['mean_effective_median_Pa']):>8s}")
     out = ROOT / "bench" / "out"
     out.mkdir(exist_ok=True)
     (out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")
