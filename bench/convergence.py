@@ -12,6 +12,12 @@ dx); for explicit Eq. (42) and the undrained wave limit (only that step: about 4
 dx = 0.04, 1e-6 s at 0.02, a million steps). Every case runs on 2 ranks to the scene's
 end (1.2 s saturated, 2 s dry).
 
+For `retrogressive_k0_0.5` (Section 4.5): dx = 0.4 m (the paper's) and 0.4 sqrt 2 =
+0.566 m (half the particles), local and regularised with l_c = 1.2 m (3 dx and 2.1 dx),
+each with the scene's own pressure scheme and step (explicit at 4e-4 s with the
+symplectic step: "scene" in the label), the full 40 s: slides and run-out side by side
+(about 25 min a case at 0.4 m on 2 ranks).
+
 The dx series at a fixed dt fraction refine dt with dx for the dry runs and the
 projection (the cap is proportional to dx) but not for TPI (2e-5 s at every dx): their
 "order in dx" is of space and time together there, of space alone for TPI.
@@ -26,6 +32,7 @@ run-out at the smallest dt fraction that has one, else the finest run.
     .venv/bin/python bench/convergence.py --quick      # CI-sized (a 1 x 0.5 m dry column)
     .venv/bin/python bench/convergence.py              # the full matrix (hours on 2 cores)
     .venv/bin/python bench/convergence.py --only 'psi0 tpi .* dt=1'   # a subset (regex)
+    .venv/bin/python bench/convergence.py --only 'k0_0.5'   # the slope pair
     .venv/bin/python bench/convergence.py --table-only # table and PNG from the JSON
 
 Prints a table, writes bench/out/convergence[-quick].json (one entry per case, kept
@@ -58,7 +65,17 @@ FRACTIONS = (1.0, 0.5, 0.25)
 # every dx): 1.5 dx at the coarsest spacing, 3 dx at the finest; the averaging's cost grows
 # as (l_c / dx)^2 (at l_c = 0.1 m the finest quick case took 4.4x the local one)
 L_C = 0.06
-REGULARISED = [f"material.plasticity.regularisation={{kind='nonlocal', length={L_C}}}"]
+# the slope's internal length: 3 dx at 0.4 m, 2.1 dx at 0.566 m
+SLOPE_L_C = 1.2
+SLOPE_DX = (0.4, 0.4 * math.sqrt(2.0))
+
+
+def regularised(length: float) -> list[str]:
+    """The --set of the non-local law with internal length `length` (m)."""
+    return [f"material.plasticity.regularisation={{kind='nonlocal', length={length}}}"]
+
+
+REGULARISED = regularised(L_C)
 # the quick mode's column: 1 m x 0.5 m (a quarter of the Section 4.4 column's size) with
 # a fifth of the cohesion (1 kPa peak, 0.2 residual), so that it collapses as the 2 m
 # column does (critical height 4 c tan(45 + phi / 2) / gamma: 0.31 m here, 1.55 m there)
@@ -81,6 +98,8 @@ def largest_dt(scene_name: str, scheme: str, dx: float, sets: list[str]) -> floa
     from psph.scene import load_scene
 
     own = load_scene(scene_name).time.dt
+    if scheme == "scene":  # the scene's own scheme and step
+        return own
     # a small time.dt: the scene's own may be beyond this scheme's limits
     scene = load_scene(scene_name, sets + [f"particles.dx={dx!r}", "time.dt=1e-9"])
     cap = solid_dt_limit(scene)
@@ -101,6 +120,7 @@ def cases(quick: bool) -> list[dict]:
         plan = [("collapse_saturated_psi0", s, [], DX, (1.0,) if s == "explicit" else FRACTIONS)
                 for s in ("tpi", "projection", "explicit")]
         plan.append(("collapse_dry", "dry", [], DX, FRACTIONS))
+        plan.append(("retrogressive_k0_0.5", "scene", [], SLOPE_DX, (1.0,)))
     for scene, scheme, base, dxs, fractions in plan:
         sets = list(base)
         if scheme == "projection":
@@ -108,7 +128,8 @@ def cases(quick: bool) -> list[dict]:
         elif scheme == "explicit":
             sets += ["pressure.scheme='explicit'"]
         for law in ("local", "regularised"):
-            law_sets = sets + (REGULARISED if law == "regularised" else [])
+            length = SLOPE_L_C if scene.startswith("retrogressive") else L_C
+            law_sets = sets + (regularised(length) if law == "regularised" else [])
             for dx in dxs:
                 top = largest_dt(scene, scheme, dx, law_sets)
                 for f in fractions:
@@ -265,7 +286,8 @@ def main(argv: list[str] | None = None) -> int:
     errors(report, rich)
     table(report, rich)
     path.write_text(json.dumps({"date": str(date.today()), "machine": platform.node(),
-                                "l_c_m": L_C, "cases": report, "series": rich}, indent=1))
+                                "l_c_m": L_C, "slope_l_c_m": SLOPE_L_C, "cases": report,
+                                "series": rich}, indent=1))
     plot(report, OUT / f"{name}.png")
     return 0
 
