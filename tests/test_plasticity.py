@@ -150,3 +150,59 @@ def test_tension_cutoff_moves_the_mean_stress_and_keeps_the_deviator():
     assert sum(out[:3]) / 3 == pytest.approx(1e3, rel=1e-12)
     assert np.allclose(np.subtract(out[:3], 1e3), np.subtract(s[:3], 5e3), atol=1e-9)
     assert out[3] == s[3] and out[5] == 0.0 and out[6] == 0.0
+
+
+def test_tension_cutoff_corner_returns_the_deviator_alone():
+    """Pure shear at sigma'_m = 0 with a cut-off at 0 (the liquefied debris of the slopes):
+    the Eq. (13) return would shift the mean by -3 K xi_psi d_lambda (contractive psi:
+    into tension, above the cut-off), so the mean stays at the cut-off and only the deviator
+    returns, onto the cone at I1 = 0: sqrt J2 = kappa, d_lambda = (sqrt J2 - kappa) / G.
+    Without the corner rule d_lambda took the volumetric part too and the state ended
+    inside the cone."""
+    psi = math.radians(-10.0)
+    tau = 3 * C
+    out = ret((0.0, 0.0, 0.0, tau), psi0=psi)
+    assert sum(out[:3]) > 0.0  # without a cut-off the return goes into tension
+    cut = dp_return(0.0, 0.0, 0.0, tau, 0.0, K, G, PHI, PHI, C, C, psi, 0.0, 0.0, 0.0)
+    kap = dp_constants(PHI, C)[1]
+    assert cut[:3] == (0.0, 0.0, 0.0)
+    assert cut[3] == pytest.approx(kap, rel=1e-12)
+    assert cut[4] == pytest.approx((tau - kap) / G, rel=1e-12)
+    assert f_of(cut[:4], PHI, C) == pytest.approx(0.0, abs=1e-9 * C)
+
+
+def test_unset_tension_cutoff_is_bitwise_the_default():
+    """tension = inf (an unset `tension_cutoff`) gives the same bits as the argument left
+    out, on random plastic states with softening."""
+    rng = np.random.default_rng(3)
+    law = (PHI, math.radians(20.0), C, 1e3, math.radians(-5.0), 5.0, 0.5)
+    for _ in range(300):
+        s = tuple(rng.normal(-20e3, 60e3, 3)) + (rng.normal(0.0, 40e3),)
+        eps = float(rng.uniform(0.0, 1.0))
+        assert dp_return(*s, eps, K, G, *law) == dp_return(*s, eps, K, G, *law, math.inf)
+
+
+def test_tension_cutoff_reaches_the_material_table():
+    """The scene key lands in the kernels' column: 0 in the slopes that set it, inf (no
+    cut-off, the paper's law) in a Drucker-Prager scene without it."""
+    from psph.kernels.update import MAT_TENSION
+    from psph.physics.material import material_table
+    from psph.scene import load_scene
+
+    assert material_table(load_scene("retrogressive_k0_0.5"))[0, MAT_TENSION] == 0.0
+    assert material_table(load_scene("collapse_dry"))[0, MAT_TENSION] == math.inf
+    sets = ["material.plasticity.tension_cutoff=2.5e3"]
+    assert material_table(load_scene("collapse_dry", sets))[0, MAT_TENSION] == 2.5e3
+
+
+def test_negative_tension_cutoff_exit_2_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    from tests.helpers import assert_bad_input
+
+    out = tmp_path / "out"
+    result = subprocess.run([sys.executable, "-m", "psph", "run", "collapse_dry", "--out",
+                             str(out), "--set", "material.plasticity.tension_cutoff=-1.0"],
+                            capture_output=True, text=True, timeout=120)
+    assert_bad_input(result, ["material.plasticity.tension_cutoff", "-1", "greater than"], out)

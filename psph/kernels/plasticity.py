@@ -59,7 +59,10 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
     and the plastic work increment d_w = sigma : d eps_p (J/m^3, `plastic_work`).
     A trial state with f <= 0 and sigma'_m <= tension is returned unchanged (d_lambda = 0,
     d_w = 0); tension (Pa): the tension cut-off of the mean effective stress, inf: none
-    (the apex c cot(phi) of Eq. 14 bounds it).
+    (the apex c cot(phi) of Eq. 14 bounds it). Inside the cone but above the cut-off only
+    the mean moves (d_lambda = 0); where the Eq. (13) return would end above the cut-off
+    (the corner) the mean goes to the cut-off and d_lambda returns the deviator alone.
+    d_w counts the cone's flow, not the cut-off's own volume change (exact at t = 0).
 
     Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
     with the sign that keeps f = 0 to first order after the update (softening makes
@@ -90,12 +93,31 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
         if denom < 0.1 * elastic:
             denom = 0.1 * elastic
         d_lam = f / denom
-        shift = d_lam * 3.0 * bulk * xi_psi
-        scale = d_lam * shear / rj2
-        sxx = sxx - shift - scale * dxx
-        syy = syy - shift - scale * dyy
-        szz = szz - shift - scale * dzz
-        sxy = sxy - scale * sxy
+        if i1 - 9.0 * bulk * xi_psi * d_lam > 3.0 * tension:
+            # the corner of the cone and the cut-off: the mean goes to the cut-off and
+            # only the deviator returns, onto the cone at I1 = 3 t (Eq. 13 without its
+            # volumetric part)
+            i1c = 3.0 * tension
+            fc = xi * i1c + rj2 - kap
+            d_lam = 0.0
+            r = 1.0
+            if fc > 0.0:
+                denom = shear - (dxi * i1c - dkap) / math.sqrt(3.0)
+                if denom < 0.1 * shear:
+                    denom = 0.1 * shear
+                d_lam = fc / denom
+                r = max(1.0 - d_lam * shear / rj2, 0.0)
+            sxx = tension + r * dxx
+            syy = tension + r * dyy
+            szz = tension + r * dzz
+            sxy = r * sxy
+        else:
+            shift = d_lam * 3.0 * bulk * xi_psi
+            scale = d_lam * shear / rj2
+            sxx = sxx - shift - scale * dxx
+            syy = syy - shift - scale * dyy
+            szz = szz - shift - scale * dzz
+            sxy = sxy - scale * sxy
     d_eps = d_lam / math.sqrt(3.0)
     # the surface at the updated plastic strain
     phi, c, psi = softened(eps_p + d_eps, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
