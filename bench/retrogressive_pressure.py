@@ -130,7 +130,7 @@ def main(argv: list[str]) -> int:
               f"{r['p_above_sigma_v_base']} particle-snapshots above it)")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
-              f"   {'pe_at':>7s} {'pe_later':>8s}"
+              f"   {'pe_at':>8s} {'pe_later':>8s}"
               "  (excess p of the debris, kPa; 'same': the particles of the debris at the "
               "slide, later; pe: their median p' at the slide and later, kPa)")
         for d in r["debris_after_slides"]:
@@ -143,7 +143,7 @@ def main(argv: list[str]) -> int:
                   f"{f(b['median_Pa']):>8s} {f(b['p95_Pa']):>8s}   "
                   f"{f(b['same_particles']['median_Pa']):>8s} "
                   f"{f(b['same_particles']['p95_Pa']):>8s}   "
-                  f"{f(a['same_particles']['mean_effective_median_Pa']):>7s} "
+                  f"{f(a['same_particles']['mean_effective_median_Pa']):>8s} "
                   f"{f(b['same_particles']['mean_effective_median_Pa']):>8s}")
     out = ROOT / "bench" / "out"
     out.mkdir(exist_ok=True)

@@ -99,8 +99,8 @@ def material_table(scene) -> np.ndarray:
     C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
     (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19), with l_c and m of its
     non-local softening strain (0: local; issue 17) and its tension cut-off (inf: none;
-    issue 13). The values are the same
-    floats as the scalars the kernels took before several materials (issue 16)."""
+    issue 13). The values are the same floats as the scalars the kernels took before
+    several materials (issue 16)."""
     mats = scene.material_list
     table = np.zeros((len(mats), MAT_COLUMNS))
     for i, m in enumerate(mats):
