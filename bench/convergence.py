@@ -35,6 +35,9 @@ run-out at the smallest dt fraction that has one, else the finest run.
     .venv/bin/python bench/convergence.py --only 'psi0 tpi .* dt=1'   # a subset (regex)
     .venv/bin/python bench/convergence.py --only 'k0_0.5'   # the slope pair
     .venv/bin/python bench/convergence.py --table-only # table and PNG from the JSON
+    .venv/bin/python bench/convergence.py --table-only \
+        --adopt 'retrogressive_k0_0.5 scene local dx=0.4 dt=1' runs/k05_cutoff
+        # a case from a finished run whose scene.toml is the case's scene, value for value
 
 Prints a table, writes bench/out/convergence[-quick].json (one entry per case, kept
 between runs: a case already measured is not run again unless --rerun) and draws
@@ -162,7 +165,28 @@ def run_case(case: dict, out: Path) -> dict:
     if proc.returncode != 0 or not summary.is_file():
         entry["failure"] = proc.stderr.strip().splitlines()[-1:] if proc.stderr else []
         return entry
-    s = json.loads(summary.read_text())
+    return read_metrics(entry, out)
+
+
+def adopt_run(case: dict, run: Path) -> dict:
+    """A case from a finished run directory (`--adopt LABEL DIR`) instead of running it
+    again: only when the scene that run wrote (DIR/scene.toml) is the case's scene with
+    its overrides, value for value; SystemExit otherwise."""
+    from psph.scene import load_scene, resolve, run_scene, to_toml
+
+    if to_toml(run_scene(run)) != to_toml(resolve(load_scene(case["scene"], case["sets"]))):
+        raise SystemExit(f"--adopt: {run}/scene.toml is not the scene of '{case['label']}'")
+    if not (run / "summary.json").is_file():
+        raise SystemExit(f"--adopt: {run} has no summary.json (the run did not finish)")
+    entry = {k: case[k] for k in ("label", "scene", "scheme", "law", "dx", "dt_fraction",
+                                  "dt", "sets")}
+    entry.update(exit_code=0, adopted_from=str(run))
+    return read_metrics(entry, run)
+
+
+def read_metrics(entry: dict, out: Path) -> dict:
+    """entry with the wall time, steps and `metrics.collapse` of OUT/summary.json."""
+    s = json.loads((out / "summary.json").read_text())
     m = s.get("metrics", {})
     col = m.get("collapse", {})
     entry.update(wall_s=s["wall_time_s"], steps=s["steps"], particles=s["particles"])
@@ -263,6 +287,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", help="run only the cases whose label matches this regex")
     ap.add_argument("--rerun", action="store_true", help="run cases already in the JSON")
     ap.add_argument("--table-only", action="store_true", help="no runs: table and PNG")
+    ap.add_argument("--adopt", action="append", nargs=2, default=[], metavar=("LABEL", "DIR"),
+                    help="take a case from a finished run of the same scene and overrides")
     args = ap.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     name = "convergence-quick" if args.quick else "convergence"
@@ -270,6 +296,11 @@ def main(argv: list[str] | None = None) -> int:
     old = json.loads(path.read_text())["cases"] if path.is_file() else []
     by_label = {e["label"]: e for e in old}
     todo = cases(args.quick)
+    by_case = {c["label"]: c for c in todo}
+    for label, run in args.adopt:
+        if label not in by_case:
+            raise SystemExit(f"--adopt: no case labelled '{label}'")
+        by_label[label] = adopt_run(by_case[label], Path(run))
     if args.only:
         todo = [c for c in todo if re.search(args.only, c["label"])]
     if not args.table_only:
