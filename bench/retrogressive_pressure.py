@@ -18,7 +18,11 @@ For each run directory:
   between slides with freshly sheared soil, whose excess is new, not undissipated):
   Fig. 20 shows it dissipating; with the same particles' median mean effective stress
   p' (compression positive) at the slide and later, whose rise is the consolidation of
-  Fig. 21 (negative: effective tension, README cause 13).
+  Fig. 21 (negative: effective tension, README cause 13);
+- the per-step maximum of p in history.csv against the same bar: rows above it, the
+  largest, and the steps between the sharp falls of the maximum (by more than 20 %) while
+  it is above the bar, beside the scene's Shepard interval `stabilisation.shepard_every`
+  (equal: the filter, not the physics, brings the maximum down).
 
 Prints a table and writes bench/out/retrogressive_pressure.json.
 """
@@ -50,6 +54,21 @@ def _median_p95(ex: np.ndarray) -> dict:
             "p95_Pa": float(np.percentile(ex, 95)) if len(ex) else None}
 
 
+def per_step_maximum(out: Path, bar: float) -> dict:
+    """history.csv's per-step p_max against `bar`: rows above it, the largest (with its
+    time), and the median step count between the falls of p_max by more than 20 % from
+    one row to the next among the rows above the bar (None without two such falls)."""
+    h = np.genfromtxt(out / "history.csv", delimiter=",", names=True)
+    p, step = h["p_max"], h["step"]
+    above = p > bar
+    falls = np.flatnonzero(above[:-1] & (p[1:] < 0.8 * p[:-1])) + 1
+    gaps = np.diff(step[falls])
+    k = int(np.argmax(p))
+    return {"rows": int(len(p)), "rows_above": int(above.sum()), "max_Pa": float(p[k]),
+            "max_time_s": float(h["time"][k]),
+            "steps_between_falls": float(np.median(gaps)) if len(gaps) else None}
+
+
 def run_checks(out: Path) -> dict:
     scene = run_scene(out)
     snaps = read_snapshots(out / "particles.h5")
@@ -63,7 +82,9 @@ def run_checks(out: Path) -> dict:
     sigma_v_base = rho_sat * abs(scene.gravity[1]) * height
     result = {"run": str(out), "t_end_s": float(times[-1]), "slides": slides["slides"],
               "slide_times_s": slides["slide_times_s"],
-              "sigma_v_base_Pa": sigma_v_base}
+              "sigma_v_base_Pa": sigma_v_base,
+              "per_step": per_step_maximum(out, sigma_v_base),
+              "shepard_every": scene.stabilisation.shepard_every}
     # basal shear zone of the first slide
     if slides["slides"]:
         t1 = slides["slide_times_s"][0]
@@ -128,6 +149,11 @@ def main(argv: list[str]) -> int:
               f"{r['p_max_Pa'] / 1e3:.0f} kPa at t = {r['p_max_at']['time_s']:.1f} s "
               f"(bar: sigma_v at the base {r['sigma_v_base_Pa'] / 1e3:.0f} kPa; "
               f"{r['p_above_sigma_v_base']} particle-snapshots above it)")
+        ps = r["per_step"]
+        print(f"  per step (history.csv): max {ps['max_Pa'] / 1e3:.0f} kPa at "
+              f"t = {ps['max_time_s']:.1f} s, {ps['rows_above']} of {ps['rows']} rows above "
+              f"the bar; the maximum falls every {ps['steps_between_falls']} steps above "
+              f"it (Shepard every {r['shepard_every']})")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
               f"   {'pe_at':>8s} {'pe_later':>8s}"
