@@ -22,7 +22,9 @@ For each run directory:
 - the per-step maximum of p in history.csv against the same bar: rows above it, the
   largest, and the steps between the sharp falls of the maximum (by more than 20 %) while
   it is above the bar, beside the scene's Shepard interval `stabilisation.shepard_every`
-  (equal: the filter, not the physics, brings the maximum down).
+  (equal: the filter, not the physics, brings the maximum down);
+- where the largest p of each snapshot sits: its height above the base, its p' and its
+  lead over the mean p of its neighbours within 1 m.
 
 Prints a table and writes bench/out/retrogressive_pressure.json.
 """
@@ -69,6 +71,23 @@ def per_step_maximum(out: Path, bar: float) -> dict:
             "steps_between_falls": float(np.median(gaps)) if len(gaps) else None}
 
 
+def largest_p_sites(snaps: list[dict]) -> list[dict]:
+    """Per snapshot after the first, the particle of the largest p: height (the base is
+    y = 0 in the slopes), p' (compression positive) and p minus the mean p of the other
+    particles within 1 m."""
+    sites = []
+    for s in snaps[1:]:
+        x, p = s["x"], s["p"]
+        i = int(np.argmax(p))
+        d = np.hypot(*(x - x[i]).T)
+        near = (d < 1.0) & (d > 0.0)
+        sites.append({"time_s": float(s["time"]), "id": int(s["id"][i]), "p_Pa": float(p[i]),
+                      "height_m": float(x[i, 1]),
+                      "p_eff_Pa": float(mean_effective_stress(s["stress"][i:i + 1])[0]),
+                      "lead_Pa": float(p[i] - p[near].mean()) if near.any() else None})
+    return sites
+
+
 def run_checks(out: Path) -> dict:
     scene = run_scene(out)
     snaps = read_snapshots(out / "particles.h5")
@@ -82,9 +101,10 @@ def run_checks(out: Path) -> dict:
     sigma_v_base = rho_sat * abs(scene.gravity[1]) * height
     result = {"run": str(out), "t_end_s": float(times[-1]), "slides": slides["slides"],
               "slide_times_s": slides["slide_times_s"],
-              "sigma_v_base_Pa": sigma_v_base,
+              "sigma_v_base_Pa": sigma_v_base, "dx_m": dx,
               "per_step": per_step_maximum(out, sigma_v_base),
-              "shepard_every": scene.stabilisation.shepard_every}
+              "shepard_every": scene.stabilisation.shepard_every,
+              "largest_p_sites": largest_p_sites(snaps)}
     # basal shear zone of the first slide
     if slides["slides"]:
         t1 = slides["slide_times_s"][0]
@@ -154,6 +174,14 @@ def main(argv: list[str]) -> int:
               f"t = {ps['max_time_s']:.1f} s, {ps['rows_above']} of {ps['rows']} rows above "
               f"the bar; the maximum falls every {ps['steps_between_falls']} steps above "
               f"it (Shepard every {r['shepard_every']})")
+        sites = r["largest_p_sites"]
+        low = [q for q in sites if q["height_m"] < 0.75 * r["dx_m"]]
+        leads = [q["lead_Pa"] for q in sites if q["lead_Pa"] is not None]
+        print(f"  largest p of a snapshot: in the bottom row (y < 0.75 dx) in {len(low)} of "
+              f"{len(sites)} snapshots, lowest at y = {min(q['height_m'] for q in sites):.2f} m;"
+              f" its p' median {np.median([q['p_eff_Pa'] for q in sites]) / 1e3:.1f} kPa, its"
+              f" lead over the neighbours' mean p (1 m) median {np.median(leads) / 1e3:.0f}"
+              f" kPa")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
               f"   {'pe_at':>8s} {'pe_later':>8s}"
