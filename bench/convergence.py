@@ -42,7 +42,8 @@ run-out at the smallest dt fraction that has one, else the finest run.
 Prints a table, writes bench/out/convergence[-quick].json (one entry per case, kept
 between runs: a case already measured is not run again unless --rerun) and draws
 bench/out/convergence[-quick].png (run-out error against wall time, and run-out
-against dx).
+against dx) and, with slope cases, bench/out/convergence-slope.png (their last
+snapshots).
 """
 
 import argparse
@@ -89,6 +90,11 @@ QUICK_SETS = ["particles.blocks=[{min=[0.0, 0.0], max=[1.0, 0.5]}]", "domain.max
 QUICK_DX = (0.04, 0.04 / math.sqrt(2.0), 0.02)
 METRICS = ("runout_m", "final_height_m", "back_scarp_m", "slides", "plastic_work_J_per_m",
            "excess_p_peak_Pa")
+
+
+def slug(label: str) -> str:
+    """A case's directory name under bench/out/convergence[-quick]/."""
+    return re.sub(r"[^A-Za-z0-9.=-]+", "_", label)
 
 
 def largest_dt(scene_name: str, scheme: str, dx: float, sets: list[str]) -> float:
@@ -189,8 +195,9 @@ def read_metrics(entry: dict, out: Path) -> dict:
     s = json.loads((out / "summary.json").read_text())
     m = s.get("metrics", {})
     col = m.get("collapse", {})
-    entry.update(wall_s=s["wall_time_s"], steps=s["steps"], particles=s["particles"])
-    for k in METRICS:
+    entry.update(wall_s=s["wall_time_s"], steps=s["steps"], particles=s["particles"],
+                 run_dir=str(out))
+    for k in METRICS + ("toe_m", "slide_times_s"):
         if k in col:
             entry[k] = col[k]
     if "excess_p_peak_Pa" not in entry and "pressure_quality" in m:
@@ -281,6 +288,43 @@ def plot(report: list[dict], path: Path) -> None:
     print(f"wrote {path}")
 
 
+def plot_slopes(report: list[dict], path: Path) -> None:
+    """The slope cases' last snapshots, one panel each (equivalent plastic strain), with
+    their slides and toe: the pictures of the slope pair."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from psph.io.snapshots import read_snapshots
+
+    rows = sorted((e for e in report if e["scene"].startswith("retrogressive")
+                   and e.get("exit_code") == 0 and e.get("run_dir")),
+                  key=lambda e: (e["law"], e["dx"]))
+    if not rows:
+        return
+    fig, axes = plt.subplots(len(rows), 1, figsize=(12, 1.5 * len(rows) + 0.8),
+                             squeeze=False, sharex=True, layout="constrained")
+    for ax, e in zip(axes[:, 0], rows, strict=True):
+        s = read_snapshots(Path(e["run_dir"]) / "particles.h5")[-1]
+        sc = ax.scatter(s["x"][:, 0], s["x"][:, 1], c=s["eps_p"], s=0.5, vmin=0.0, vmax=2.0,
+                        cmap="viridis", rasterized=True)
+        ax.axvline(e["toe_m"], color="r", lw=0.8)
+        times = ", ".join(f"{t:.0f}" for t in e.get("slide_times_s") or [])
+        ax.set_title(f"{e['law']}, dx = {e['dx']:.3g} m: {e['slides']} slides ({times} s), "
+                     f"toe {e['toe_m']:.0f} m, run-out {e['runout_m']:.0f} m, "
+                     f"t = {s['time']:.0f} s", fontsize=9)
+        ax.set_xlim(0.0, max(r["toe_m"] for r in rows) + 20.0)
+        ax.set_ylim(0.0, 22.0)
+        ax.set_ylabel("y (m)")  # vertical scale exaggerated
+    axes[-1, 0].set_xlabel("x (m); vertical scale exaggerated")
+    fig.colorbar(sc, ax=axes[:, 0], label="equivalent plastic strain", shrink=0.8)
+    fig.suptitle(f"retrogressive_k0_0.5 at two spacings, local and non-local softening "
+                 f"(l_c = {SLOPE_L_C} m; {date.today()}, {platform.node()})", fontsize=10)
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the CI-sized dry column")
@@ -308,9 +352,8 @@ def main(argv: list[str] | None = None) -> int:
             done = by_label.get(c["label"], {})
             if not args.rerun and done.get("exit_code") == 0 and done.get("sets") == c["sets"]:
                 continue  # the same case (the same overrides, l_c among them) measured
-            slug = re.sub(r"[^A-Za-z0-9.=-]+", "_", c["label"])
             print(f"[convergence] {c['label']} ...", flush=True)
-            by_label[c["label"]] = run_case(c, OUT / name / slug)
+            by_label[c["label"]] = run_case(c, OUT / name / slug(c["label"]))
             report = {"date": str(date.today()), "machine": platform.node(),
                       "cases": list(by_label.values())}
             path.write_text(json.dumps(report, indent=1))
@@ -322,6 +365,7 @@ def main(argv: list[str] | None = None) -> int:
                                 "l_c_m": L_C, "slope_l_c_m": SLOPE_L_C, "cases": report,
                                 "series": rich}, indent=1))
     plot(report, OUT / f"{name}.png")
+    plot_slopes(report, OUT / f"{name}-slope.png")
     return 0
 
 
