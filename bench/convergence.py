@@ -153,6 +153,9 @@ def cases(quick: bool) -> list[dict]:
     return out
 
 
+CASE_KEYS = ("label", "scene", "scheme", "law", "dx", "dt_fraction", "dt", "sets")
+
+
 def run_case(case: dict, out: Path) -> dict:
     """One case on 2 ranks; its metrics from summary.json, or how it failed."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
@@ -164,8 +167,7 @@ def run_case(case: dict, out: Path) -> dict:
         cmd += ["--set", s]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=env, cwd=ROOT, stderr=subprocess.PIPE, text=True)
-    entry = {k: case[k] for k in ("label", "scene", "scheme", "law", "dx", "dt_fraction",
-                                  "dt", "sets")}
+    entry = {k: case[k] for k in CASE_KEYS}
     entry.update(exit_code=proc.returncode, bench_wall_s=time.perf_counter() - t0)
     summary = out / "summary.json"
     if proc.returncode != 0 or not summary.is_file():
@@ -177,15 +179,25 @@ def run_case(case: dict, out: Path) -> dict:
 def adopt_run(case: dict, run: Path) -> dict:
     """A case from a finished run directory (`--adopt LABEL DIR`) instead of running it
     again: only when the scene that run wrote (DIR/scene.toml) is the case's scene with
-    its overrides, value for value; SystemExit otherwise."""
-    from psph.scene import load_scene, resolve, run_scene, to_toml
+    its overrides, value for value, and the run went from t = 0 to its end in one go
+    (its wall time is then the case's); SystemExit otherwise. The code that ran it is not
+    checked: adopt a run made with the code of the other cases."""
+    from psph.errors import SceneError
+    from psph.scene import load_scene, run_scene, to_toml
 
-    if to_toml(run_scene(run)) != to_toml(resolve(load_scene(case["scene"], case["sets"]))):
+    run = run.resolve()
+    try:
+        written = to_toml(run_scene(run))
+        summary = json.loads((run / "summary.json").read_text())
+    except (OSError, SceneError, ValueError) as err:
+        raise SystemExit(f"--adopt: {run}: {err}") from None
+    if written != to_toml(load_scene(case["scene"], case["sets"])):
         raise SystemExit(f"--adopt: {run}/scene.toml is not the scene of '{case['label']}'")
-    if not (run / "summary.json").is_file():
-        raise SystemExit(f"--adopt: {run} has no summary.json (the run did not finish)")
-    entry = {k: case[k] for k in ("label", "scene", "scheme", "law", "dx", "dt_fraction",
-                                  "dt", "sets")}
+    if summary.get("status") != "finished" or "restarted_from" in summary:
+        raise SystemExit(f"--adopt: {run} is not one finished run from t = 0 (status "
+                         f"{summary.get('status')!r}, restarted from "
+                         f"{summary.get('restarted_from')})")
+    entry = {k: case[k] for k in CASE_KEYS}
     entry.update(exit_code=0, adopted_from=str(run))
     return read_metrics(entry, run)
 
@@ -196,7 +208,7 @@ def read_metrics(entry: dict, out: Path) -> dict:
     m = s.get("metrics", {})
     col = m.get("collapse", {})
     entry.update(wall_s=s["wall_time_s"], steps=s["steps"], particles=s["particles"],
-                 run_dir=str(out))
+                 run_dir=str(out.resolve()))
     for k in METRICS + ("toe_m", "slide_times_s"):
         if k in col:
             entry[k] = col[k]
@@ -288,6 +300,15 @@ def plot(report: list[dict], path: Path) -> None:
     print(f"wrote {path}")
 
 
+def last_snapshot(path: Path) -> dict:
+    """x, eps_p and time of the last snapshot in a run's particles.h5."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        g = f["snapshots"][sorted(f["snapshots"])[-1]]  # the order of read_snapshots
+        return {"x": g["x"][...], "eps_p": g["eps_p"][...], "time": float(g.attrs["time"])}
+
+
 def plot_slopes(report: list[dict], path: Path) -> None:
     """The slope cases' last snapshots, one panel each (equivalent plastic strain), with
     their slides and toe: the pictures of the slope pair."""
@@ -296,17 +317,16 @@ def plot_slopes(report: list[dict], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from psph.io.snapshots import read_snapshots
-
     rows = sorted((e for e in report if e["scene"].startswith("retrogressive")
-                   and e.get("exit_code") == 0 and e.get("run_dir")),
+                   and e.get("exit_code") == 0 and "toe_m" in e
+                   and (Path(e.get("run_dir", "")) / "particles.h5").is_file()),
                   key=lambda e: (e["law"], e["dx"]))
     if not rows:
         return
     fig, axes = plt.subplots(len(rows), 1, figsize=(12, 1.5 * len(rows) + 0.8),
                              squeeze=False, sharex=True, layout="constrained")
     for ax, e in zip(axes[:, 0], rows, strict=True):
-        s = read_snapshots(Path(e["run_dir"]) / "particles.h5")[-1]
+        s = last_snapshot(Path(e["run_dir"]) / "particles.h5")
         sc = ax.scatter(s["x"][:, 0], s["x"][:, 1], c=s["eps_p"], s=0.5, vmin=0.0, vmax=2.0,
                         cmap="viridis", rasterized=True)
         ax.axvline(e["toe_m"], color="r", lw=0.8)
@@ -319,8 +339,8 @@ def plot_slopes(report: list[dict], path: Path) -> None:
         ax.set_ylabel("y (m)")  # vertical scale exaggerated
     axes[-1, 0].set_xlabel("x (m); vertical scale exaggerated")
     fig.colorbar(sc, ax=axes[:, 0], label="equivalent plastic strain", shrink=0.8)
-    fig.suptitle(f"retrogressive_k0_0.5 at two spacings, local and non-local softening "
-                 f"(l_c = {SLOPE_L_C} m; {date.today()}, {platform.node()})", fontsize=10)
+    fig.suptitle(f"retrogressive_k0_0.5, local and non-local softening (l_c = {SLOPE_L_C} m;"
+                 f" {date.today()}, {platform.node()})", fontsize=10)
     fig.savefig(path, dpi=110)
     print(f"wrote {path}")
 
@@ -344,6 +364,8 @@ def main(argv: list[str] | None = None) -> int:
     for label, run in args.adopt:
         if label not in by_case:
             raise SystemExit(f"--adopt: no case labelled '{label}'")
+        if args.rerun:
+            raise SystemExit("--adopt and --rerun: --rerun would run the adopted case again")
         by_label[label] = adopt_run(by_case[label], Path(run))
     if args.only:
         todo = [c for c in todo if re.search(args.only, c["label"])]

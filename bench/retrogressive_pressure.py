@@ -19,12 +19,14 @@ For each run directory:
   Fig. 20 shows it dissipating; with the same particles' median mean effective stress
   p' (compression positive) at the slide and later, whose rise is the consolidation of
   Fig. 21 (negative: effective tension, README cause 13);
-- the per-step maximum of p in history.csv against the same bar: rows above it, the
-  largest, and the steps between the sharp falls of the maximum (by more than 20 %) while
-  it is above the bar, beside the scene's Shepard interval `stabilisation.shepard_every`
-  (equal: the filter, not the physics, brings the maximum down);
+- the maximum of p in history.csv (a row per 1 ms, 2-3 steps) against the same bar: rows
+  above it, the largest, and the steps between the sharp falls of the maximum (by more
+  than 20 %) while it is above the bar, beside the scene's Shepard interval
+  `stabilisation.shepard_every` (equal: the maximum falls at the filter's passes);
 - where the largest p of each snapshot sits: its height above the base, its p' and its
-  lead over the mean p of its neighbours within 1 m.
+  lead over the mean p of the particles within 1 m, beside the median lead of every
+  particle of the bottom row (y < 0.75 dx; its neighbours all sit higher, at less
+  overburden, so its lead is positive without any spike).
 
 Prints a table and writes bench/out/retrogressive_pressure.json.
 """
@@ -56,10 +58,11 @@ def _median_p95(ex: np.ndarray) -> dict:
             "p95_Pa": float(np.percentile(ex, 95)) if len(ex) else None}
 
 
-def per_step_maximum(out: Path, bar: float) -> dict:
-    """history.csv's per-step p_max against `bar`: rows above it, the largest (with its
-    time), and the median step count between the falls of p_max by more than 20 % from
-    one row to the next among the rows above the bar (None without two such falls)."""
+def history_maximum(out: Path, bar: float) -> dict:
+    """history.csv's p_max (a row per history output, not every step) against `bar`: rows
+    above it, the largest (with its time), and the median step count between the falls
+    of p_max by more than 20 % from one row to the next among the rows above the bar
+    (None without two such falls)."""
     h = np.genfromtxt(out / "history.csv", delimiter=",", names=True)
     p, step = h["p_max"], h["step"]
     above = p > bar
@@ -71,21 +74,39 @@ def per_step_maximum(out: Path, bar: float) -> dict:
             "steps_between_falls": float(np.median(gaps)) if len(gaps) else None}
 
 
-def largest_p_sites(snaps: list[dict]) -> list[dict]:
+def _lead(x: np.ndarray, p: np.ndarray, i: np.ndarray, radius: float = 1.0) -> np.ndarray:
+    """p[i] minus the mean p of the other particles within `radius` of each i (nan with
+    none), over the particles sorted by x."""
+    order = np.argsort(x[:, 0])
+    xs = x[order, 0]
+    out = np.full(len(i), np.nan)
+    for k, j in enumerate(i):
+        lo, hi = np.searchsorted(xs, [x[j, 0] - radius, x[j, 0] + radius])
+        cand = order[lo:hi]
+        d = np.linalg.norm(x[cand] - x[j], axis=1)
+        near = cand[(d < radius) & (cand != j)]
+        if len(near):
+            out[k] = p[j] - p[near].mean()
+    return out
+
+
+def largest_p_sites(snaps: list[dict], dx: float) -> dict:
     """Per snapshot after the first, the particle of the largest p: height (the base is
-    y = 0 in the slopes), p' (compression positive) and p minus the mean p of the other
-    particles within 1 m."""
-    sites = []
+    y = 0 in the slopes), p' (compression positive) and its lead (`_lead`); and the median
+    lead of the bottom row (y < 0.75 dx) in each snapshot, the lead without a spike."""
+    sites, row = [], []
     for s in snaps[1:]:
         x, p = s["x"], s["p"]
         i = int(np.argmax(p))
-        d = np.hypot(*(x - x[i]).T)
-        near = (d < 1.0) & (d > 0.0)
+        lead = _lead(x, p, np.array([i]))[0]
         sites.append({"time_s": float(s["time"]), "id": int(s["id"][i]), "p_Pa": float(p[i]),
                       "height_m": float(x[i, 1]),
                       "p_eff_Pa": float(mean_effective_stress(s["stress"][i:i + 1])[0]),
-                      "lead_Pa": float(p[i] - p[near].mean()) if near.any() else None})
-    return sites
+                      "lead_Pa": None if np.isnan(lead) else float(lead)})
+        bottom = _lead(x, p, np.flatnonzero(x[:, 1] < 0.75 * dx))
+        if np.isfinite(bottom).any():
+            row.append(float(np.nanmedian(bottom)))
+    return {"sites": sites, "bottom_row_lead_median_Pa": row}
 
 
 def run_checks(out: Path) -> dict:
@@ -102,9 +123,9 @@ def run_checks(out: Path) -> dict:
     result = {"run": str(out), "t_end_s": float(times[-1]), "slides": slides["slides"],
               "slide_times_s": slides["slide_times_s"],
               "sigma_v_base_Pa": sigma_v_base, "dx_m": dx,
-              "per_step": per_step_maximum(out, sigma_v_base),
+              "history": history_maximum(out, sigma_v_base),
               "shepard_every": scene.stabilisation.shepard_every,
-              "largest_p_sites": largest_p_sites(snaps)}
+              "largest_p": largest_p_sites(snaps, dx)}
     # basal shear zone of the first slide
     if slides["slides"]:
         t1 = slides["slide_times_s"][0]
@@ -169,19 +190,24 @@ def main(argv: list[str]) -> int:
               f"{r['p_max_Pa'] / 1e3:.0f} kPa at t = {r['p_max_at']['time_s']:.1f} s "
               f"(bar: sigma_v at the base {r['sigma_v_base_Pa'] / 1e3:.0f} kPa; "
               f"{r['p_above_sigma_v_base']} particle-snapshots above it)")
-        ps = r["per_step"]
-        print(f"  per step (history.csv): max {ps['max_Pa'] / 1e3:.0f} kPa at "
-              f"t = {ps['max_time_s']:.1f} s, {ps['rows_above']} of {ps['rows']} rows above "
-              f"the bar; the maximum falls every {ps['steps_between_falls']} steps above "
-              f"it (Shepard every {r['shepard_every']})")
-        sites = r["largest_p_sites"]
-        low = [q for q in sites if q["height_m"] < 0.75 * r["dx_m"]]
+        h = r["history"]
+        falls = h["steps_between_falls"]
+        print(f"  history.csv (a row per 1 ms): max {h['max_Pa'] / 1e3:.0f} kPa at "
+              f"t = {h['max_time_s']:.1f} s, {h['rows_above']} of {h['rows']} rows above "
+              "the bar; " + (f"above it the maximum falls every {falls:.0f} steps"
+                             if falls is not None else "no repeated falls above it")
+              + f" (Shepard every {r['shepard_every']})")
+        sites = r["largest_p"]["sites"]
         leads = [q["lead_Pa"] for q in sites if q["lead_Pa"] is not None]
-        print(f"  largest p of a snapshot: in the bottom row (y < 0.75 dx) in {len(low)} of "
-              f"{len(sites)} snapshots, lowest at y = {min(q['height_m'] for q in sites):.2f} m;"
-              f" its p' median {np.median([q['p_eff_Pa'] for q in sites]) / 1e3:.1f} kPa, its"
-              f" lead over the neighbours' mean p (1 m) median {np.median(leads) / 1e3:.0f}"
-              f" kPa")
+        row = r["largest_p"]["bottom_row_lead_median_Pa"]
+        if sites and leads and row:
+            low = [q for q in sites if q["height_m"] < 0.75 * r["dx_m"]]
+            print(f"  largest p of a snapshot: in the bottom row (y < 0.75 dx) in {len(low)} "
+                  f"of {len(sites)} snapshots, lowest at y = "
+                  f"{min(q['height_m'] for q in sites):.2f} m; its p' median "
+                  f"{np.median([q['p_eff_Pa'] for q in sites]) / 1e3:.1f} kPa; its lead over "
+                  f"the mean p within 1 m median {np.median(leads) / 1e3:.0f} kPa (the "
+                  f"bottom row's own lead: median {np.median(row) / 1e3:.0f} kPa)")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
               f"   {'pe_at':>8s} {'pe_later':>8s}"
