@@ -226,10 +226,15 @@ PAPER_LAW_RETURNS = [
 
 @pytest.mark.parametrize("trial, eps_p, before", PAPER_LAW_RETURNS)
 def test_unset_tension_cutoff_returns_the_paper_law_bit_for_bit(trial, eps_p, before):
-    """tension = inf (an unset `tension_cutoff`) gives the returns of the kernel before the
-    cut-off was added, bit for bit: elastic, cone and apex states with softening."""
+    """tension = inf (an unset `tension_cutoff`) and the argument left out (as
+    `verify/softening_band.py` calls it) give the returns of the kernel before the cut-off
+    was added, bit for bit (the sign of a zero too): elastic, cone and apex states with
+    softening."""
     law = (PHI, math.radians(20.0), C, 1e3, math.radians(-5.0), 5.0, 0.5)
-    assert dp_return(*trial, eps_p, K, G, *law, math.inf) == before
+    bits = np.array(before).view(np.int64)
+    assert (np.array(dp_return(*trial, eps_p, K, G, *law, math.inf)).view(np.int64)
+            == bits).all()
+    assert (np.array(dp_return(*trial, eps_p, K, G, *law)).view(np.int64) == bits).all()
 
 
 def test_tension_cutoff_reaches_the_material_table():
