@@ -171,7 +171,10 @@ def run_case(case: dict, out: Path) -> dict:
     entry.update(exit_code=proc.returncode, bench_wall_s=time.perf_counter() - t0)
     summary = out / "summary.json"
     if proc.returncode != 0 or not summary.is_file():
-        entry["failure"] = proc.stderr.strip().splitlines()[-1:] if proc.stderr else []
+        lines = (proc.stderr or "").strip().splitlines()
+        # psph's own line (exit 2 or 3 names the key, or the step, particle and field);
+        # mpirun appends its banner after it
+        entry["failure"] = [s for s in lines if s.startswith("psph")][-2:] or lines[-1:]
         return entry
     return read_metrics(entry, out)
 
