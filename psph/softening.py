@@ -27,8 +27,12 @@ class NonlocalSoftening:
     """l_c and m per material, and the step's eps_hat of the owned rows (`eps_hat`, grown
     with the store, never per step)."""
 
-    def __init__(self, scene, cell_size: float):
+    def __init__(self, scene, cell_size: float, wall_axis: np.ndarray,
+                 wall_pos: np.ndarray):
+        """wall_axis, wall_pos: the walls whose mirror images enter the averages."""
         regs = _regularisations(scene)
+        self.wall_axis = np.asarray(wall_axis, np.int64)
+        self.wall_pos = np.asarray(wall_pos, float)
         self.lengths = np.array([r.length if r is not None else 0.0 for r in regs])
         self.weights = np.array([r.m if r is not None else 1.0 for r in regs])
         self.rings = rings_for(float(self.lengths.max()), cell_size)
@@ -51,9 +55,12 @@ class NonlocalSoftening:
             self.plastic_cell = np.zeros(2 * cells, np.int8)
         nonlocal_strain(st.n_owned, st.n_real, st.x, st.vol, st.eps_p, st.material,
                         self.lengths, self.weights, cell_of, cell_start, order, ncell,
-                        self.rings, self.plastic_cell, self.eps_hat)
+                        self.rings, self.plastic_cell, self.wall_axis, self.wall_pos,
+                        self.eps_hat)
 
 
-def nonlocal_softening(scene, cell_size: float) -> NonlocalSoftening | None:
+def nonlocal_softening(scene, cell_size: float, wall_axis: np.ndarray,
+                       wall_pos: np.ndarray) -> NonlocalSoftening | None:
     """The stage's state, or None when no material is regularised (the local law)."""
-    return NonlocalSoftening(scene, cell_size) if reach(scene) > 0.0 else None
+    return NonlocalSoftening(scene, cell_size, wall_axis, wall_pos) \
+        if reach(scene) > 0.0 else None

@@ -142,7 +142,8 @@ class Simulation:
         margin = 2.0 * self.h
         self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
         self.cell_size = 2.0 * self.h
-        self.softening = nonlocal_softening(scene, self.cell_size)  # None: local softening
+        self.softening = nonlocal_softening(scene, self.cell_size, self.wall_axis,
+                                            self.wall_pos)  # None: local softening
         self.origin = np.array(lo, float) - 4.0 * self.cell_size
         span = np.array(hi, float) - np.array(lo, float)
         self.cell_max = (np.ceil(span / self.cell_size) + 8).astype(np.int64)

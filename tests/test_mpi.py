@@ -108,8 +108,9 @@ REGULARISED = ["domain.max=[3.0, 1.5]", "particles.blocks.0.max=[1.0, 1.0]",
 @pytest.mark.mpi(min_size=2)
 def test_regularised_softening_one_vs_two_ranks_bitwise(tmp_path_factory):
     """The non-local eps_p (psph/kernels/nonlocal_strain.py) sums the same particles in
-    the same order on 1 and 2 ranks; by 0.2 s 25 particles have yielded on both sides of
-    the cut (eps_p > 1e-3, y from 0.02 to 0.87 m; the cut is near y = 0.5 m). With the
+    the same order on 1 and 2 ranks; by 0.2 s 25 particles had yielded on both sides of
+    the cut (eps_p > 1e-3, y from 0.02 to 0.87 m, before the wall images entered the
+    averages; the cut is near y = 0.5 m). With the
     halo left at 2h (not following 2 l_c) x differed by 1.4e-8 m at 0.1 s."""
     from mpi4py import MPI
 

@@ -23,7 +23,8 @@ def _lattice(side: int = 31) -> np.ndarray:
     return np.array(np.meshgrid(g, g, indexing="xy")).reshape(2, -1).T.copy()
 
 
-def _average(x, eps, lengths, weights, material=None, n_owned=None):
+def _average(x, eps, lengths, weights, material=None, n_owned=None, walls=()):
+    """eps_hat of every particle; walls: (axis, position) pairs whose images enter."""
     n = len(x)
     material = np.zeros(n) if material is None else material
     assert material.max() < len(lengths)  # the kernel reads lengths[material] unchecked
@@ -32,7 +33,9 @@ def _average(x, eps, lengths, weights, material=None, n_owned=None):
     nonlocal_strain(n if n_owned is None else n_owned, n, x, np.full(n, DX * DX), eps,
                     material, np.asarray(lengths, float), np.asarray(weights, float), cell_of,
                     cell_start, order, ncell, rings_for(max(lengths), 2 * H),
-                    np.zeros(int(ncell[0] * ncell[1]), np.int8), out)
+                    np.zeros(int(ncell[0] * ncell[1]), np.int8),
+                    np.array([a for a, _ in walls], np.int64),
+                    np.array([p for _, p in walls], float), out)
     return out
 
 
@@ -120,3 +123,43 @@ def test_bad_regularisation_exit_2_one_line(tmp_path, value, words):
     out = tmp_path / "out"
     assert_bad_input(_cli("run", "collapse_dry", "--out", str(out), "--set",
                           f"material.plasticity.regularisation={value}"), words, out)
+
+
+@pytest.mark.parametrize("m", [1.0, 2.0])
+def test_wall_images_equal_the_average_over_the_mirrored_lattice(m):
+    """With walls at x = -dx/2 and y = -dx/2 (a corner) the average of every particle
+    equals the plain average over the lattice extended by its images across each wall
+    and across both, with the field mirrored (to 1e-12: only the order of the sums
+    differs); a constant stays exact."""
+    x = _lattice(13)
+    n = len(x)
+    rng = np.random.default_rng(5)
+    eps = rng.uniform(0.0, 1.0, n)
+    walls = ((0, -0.5 * DX), (1, -0.5 * DX))
+    out = _average(x, eps, [0.17], [m], walls=walls)
+    images = [x]
+    for flip in ((True, False), (False, True), (True, True)):
+        y = x.copy()
+        for ax in (0, 1):
+            if flip[ax]:
+                y[:, ax] = -DX - y[:, ax]
+        images.append(y)
+    big = np.concatenate(images)
+    ref = _average(big, np.tile(eps, 4), [0.17], [m], n_owned=n)
+    assert np.max(np.abs(out - ref[:n])) < 1e-12
+    const = _average(x, np.full(n, 0.037), [0.17], [m], walls=walls)
+    assert np.max(np.abs(const - 0.037)) < 1e-12
+
+
+def test_a_band_on_a_wall_softens_with_the_images():
+    """A band of one row on a wall (eps_p = 10 there, 0 above) with m = 2 and l_c =
+    2.12 dx (the slope at dx = 0.566 m): without images the support is one-sided, eps_bar
+    is under half of eps_p and eps_hat is clipped to 0 (the row never softens: README,
+    issue 17); with them eps_hat is 1.18."""
+    x = _lattice(41)
+    eps = np.where(x[:, 1] < 0.5 * DX, 10.0, 0.0)
+    row = np.flatnonzero((x[:, 1] < 0.5 * DX) & (np.abs(x[:, 0] - 2.0) < 1e-9))[0]
+    alone = _average(x, eps, [2.12 * DX], [2.0])
+    imaged = _average(x, eps, [2.12 * DX], [2.0], walls=((1, -0.5 * DX),))
+    assert alone[row] == 0.0
+    assert imaged[row] == pytest.approx(1.18, abs=0.01)

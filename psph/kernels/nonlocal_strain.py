@@ -11,9 +11,16 @@ Brinkgreve 1994; Galavi & Schweiger 2010)
 
 W the cubic spline of Eq. (21) with smoothing length l_c (support 2 l_c), the internal
 length of the material in metres, independent of dx; the sum runs over the real particles
-(owned and halo; not wall ghosts or boundary particles) of the same material within
-2 l_c, i included. The weights are sum-normalised, so a constant field is reproduced
-exactly; they are symmetric, so a linear field is reproduced where the support is full.
+(owned and halo; not boundary particles) of the same material within 2 l_c, i included,
+and over their mirror images across the walls (free-slip and fixed planes of
+`boundaries`; across two walls of different axes at a corner), as the wall ghosts
+continue every other field. Without the images the support of a particle on a wall is
+one-sided: a band along the wall (a slide's basal row) had eps_bar about eps_p / 2, so
+eps_hat = 2 eps_bar - eps_p was clipped to 0 and the band never softened (its psi stayed
+psi_0 and a contractive row compacted to n = 0; README, issue 17). With them a band on a
+wall is the half of a band symmetric about it. The weights are sum-normalised, so a
+constant field is reproduced exactly; they are symmetric, so a linear field is
+reproduced where the support is full (and lies off the walls).
 m >= 1: m = 1 the plain non-local average; m > 1 weights the average above the local
 value, which keeps the band at a width set by l_c (Jirasek & Rolshoven 2003).
 eps_hat is clipped at 0 (no strength above the peak). The local eps_p still accumulates
@@ -29,8 +36,12 @@ from psph.kernels.spline import w_cubic
 
 @nb.njit(cache=True)
 def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
-                    cell_start, order, ncell, rings, plastic_cell, out):
+                    cell_start, order, ncell, rings, plastic_cell, wall_axis, wall_pos, out):
     """out[i] = eps_hat_i of particles 0..n_owned-1 (module docstring).
+
+    wall_axis, wall_pos: the walls x[axis] = pos whose images enter the sums (empty: none).
+    An image of j lies no closer to i than j itself (both on the soil's side), so the
+    cells that hold the real particles within 2 l_c hold every image's source too.
 
     lengths[k], weights[k]: l_c (m) and m of material k (l_c = 0: local, out = eps_p);
     cell_of, cell_start, order, ncell: the step's cell lists (cells of side 2h, particles
@@ -43,6 +54,7 @@ def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, 
     the sums run only where something has yielded within the support."""
     ncx = ncell[0]
     ncy = ncell[1]
+    nw = len(wall_axis)
     for c in range(ncx * ncy):
         plastic_cell[c] = 0
     for j in range(n_real):
@@ -83,9 +95,40 @@ def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, 
                     w = vol[j] * w_cubic(math.sqrt(r2), lc)
                     num += w * eps_p[j]
                     den += w
+                    for a in range(nw):
+                        ax = wall_axis[a]
+                        if abs(x[i, ax] - wall_pos[a]) >= 2.0 * lc:
+                            continue
+                        g = _image_weight(x, i, j, ax, wall_pos[a], -1, 0.0, vol[j], lc)
+                        num += g * eps_p[j]
+                        den += g
+                        for b in range(a + 1, nw):  # the corner image across both
+                            bx = wall_axis[b]
+                            if bx == ax or abs(x[i, bx] - wall_pos[b]) >= 2.0 * lc:
+                                continue
+                            g = _image_weight(x, i, j, ax, wall_pos[a], bx, wall_pos[b],
+                                              vol[j], lc)
+                            num += g * eps_p[j]
+                            den += g
         m = weights[k]
         e = (1.0 - m) * eps_p[i] + m * (num / den)
         out[i] = e if e > 0.0 else 0.0
+
+
+@nb.njit(cache=True, inline="always")
+def _image_weight(x, i, j, ax, pos, bx, pos_b, vol_j, lc):
+    """V_j W(|x_i - image of x_j|, l_c) for the image of j across the wall x[ax] = pos, and
+    also across x[bx] = pos_b when bx >= 0 (a corner); 0 beyond the support."""
+    d0 = x[j, 0] - x[i, 0]
+    d1 = x[j, 1] - x[i, 1]
+    if ax == 0 or bx == 0:
+        d0 = 2.0 * (pos if ax == 0 else pos_b) - x[j, 0] - x[i, 0]
+    if ax == 1 or bx == 1:
+        d1 = 2.0 * (pos if ax == 1 else pos_b) - x[j, 1] - x[i, 1]
+    r2 = d0 * d0 + d1 * d1
+    if r2 >= 4.0 * lc * lc:
+        return 0.0
+    return vol_j * w_cubic(math.sqrt(r2), lc)
 
 
 def rings_for(length: float, cell_size: float) -> int:

@@ -76,6 +76,8 @@ def _run(n, dy, steps, dt, speed, rho, damping, bulk, shear, sigma0, c_p, dip, d
     weights = np.array([weight])
     eps_all = np.zeros(n_real)
     plastic_cell = np.zeros(ncell[0] * ncell[1], np.int8)
+    no_walls = np.zeros(0, np.int64)  # the band's ends are its loads, not walls
+    no_pos = np.zeros(0)
     height = n * dy
     peak = 0.0
     for _ in range(steps):
@@ -84,7 +86,8 @@ def _run(n, dy, steps, dt, speed, rho, damping, bulk, shear, sigma0, c_p, dip, d
             for j in range(n_real):
                 eps_all[j] = state[j % n, 1]
             nonlocal_strain(n, n_real, x, vol, eps_all, material, lengths, weights, cell_of,
-                            cell_start, order, ncell, rings, plastic_cell, state[:, 2])
+                            cell_start, order, ncell, rings, plastic_cell, no_walls,
+                            no_pos, state[:, 2])
         else:
             for k in range(n):
                 state[k, 2] = state[k, 1]
