@@ -261,3 +261,29 @@ def test_negative_tension_cutoff_exit_2_one_line(tmp_path):
                              str(out), "--set", "material.plasticity.tension_cutoff=-1.0"],
                             capture_output=True, text=True, timeout=120)
     assert_bad_input(result, ["material.plasticity.tension_cutoff", "-1", "greater than"], out)
+
+
+def test_dilation_decays_with_its_own_strain():
+    """eps_dilation drives psi of Eq. (19) alone: with the softening strain at 0 (peak phi
+    and c, as a regularised eps_hat clipped to 0) and eps_dilation = 10, the return is
+    that of psi_0 exp(-s_f 10) without decay; eps_dilation = eps_p gives the default's
+    bits; a contractive state's volume change (d_lambda 3 xi_psi) shrinks with it."""
+    law = dict(phi_p=PHI, phi_r=math.radians(20.0), c_p=C, c_r=1e3, eta=5.0)
+    psi0, s_f = math.radians(-5.0), 0.5
+    s = (-20e3, -120e3, -60e3, 45e3)
+    own = dp_return(*s, 0.0, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
+                    law["eta"], s_f, math.inf, 10.0)
+    decayed = dp_return(*s, 0.0, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"],
+                        psi0 * math.exp(-s_f * 10.0), law["eta"], 0.0)
+    assert own[4] > 0.0
+    assert np.allclose(own, decayed, rtol=1e-12, atol=1e-9)
+    peak = dp_return(*s, 0.0, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
+                     law["eta"], s_f)
+    mean = [sum(r[:3]) for r in (s, own, peak)]
+    assert mean[2] - mean[0] > 100.0 * abs(mean[1] - mean[0])  # psi_0 contracts, ~0 not
+    for eps in (0.0, 0.3, 2.0):
+        a = dp_return(*s, eps, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
+                      law["eta"], s_f, math.inf, eps)
+        b = dp_return(*s, eps, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
+                      law["eta"], s_f)
+        assert np.array_equal(np.array(a).view(np.int64), np.array(b).view(np.int64))

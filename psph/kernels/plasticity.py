@@ -50,7 +50,7 @@ def _invariants(sxx, syy, szz, sxy):
 
 @nb.njit(cache=True)
 def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
-              s_f, tension=math.inf):
+              s_f, tension=math.inf, eps_dilation=-1.0):
     """Return the trial stress to the Drucker-Prager surface.
 
     Returns (sxx, syy, szz, sxy, d_lambda, d_eps_p, d_w): the corrected stress, the
@@ -63,12 +63,16 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
     the mean moves (d_lambda = 0); where the Eq. (13) return would end above the cut-off
     (the corner) the mean goes to the cut-off and d_lambda returns the deviator alone.
     d_w counts the cone's flow, not the cut-off's own volume change (exact at t = 0).
+    eps_dilation >= 0: the strain whose Eq. (19) decays psi, the particle's own eps_p when
+    eps_p here is the regularised one (`update.advance`); < 0: eps_p, as for phi and c.
 
     Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
     with the sign that keeps f = 0 to first order after the update (softening makes
     df/d eps_p > 0 and enlarges d_lambda); the denominator is kept positive.
     """
     phi, c, psi = softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+    if eps_dilation >= 0.0:
+        psi = psi0 * math.exp(-s_f * eps_dilation)
     xi, kap = dp_constants(phi, c)
     xi_psi = dp_constants(psi, 0.0)[0]
     i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy)

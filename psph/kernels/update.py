@@ -189,8 +189,12 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
     whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
     psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
-    the softening of Eq. (17)-(19) takes eps_soft[i]: eps_p itself (the local law) or the
-    regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17); plastic_work
+    the softening of phi and c, Eq. (17)-(18), takes eps_soft[i]: eps_p itself (the local
+    law) or the regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17); the
+    decay of psi, Eq. (19), the particle's own eps_p (the approach to the critical state
+    is the particle's own: with the regularised strain a row sliding on a wall, twice as
+    strained as its support's average, kept eps_hat = 0, psi = psi_0 and contracted to
+    n = 0, README issue 17); plastic_work
     accumulates the dissipated work sigma : d eps_p (J/m^3, `plasticity.dp_return`).
     ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
     hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
@@ -247,7 +251,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
             d = MAT_DP
             r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_soft[i],
                           lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1], row[d + 2],
-                          row[d + 3], row[d + 4], row[d + 5], row[d + 6], row[MAT_TENSION])
+                          row[d + 3], row[d + 4], row[d + 5], row[d + 6], row[MAT_TENSION],
+                          eps_p[i])
             stress[i, 0] = r[0]
             stress[i, 1] = r[1]
             stress[i, 2] = r[2]
