@@ -5,11 +5,10 @@ Eq. (19) gives for eps_hat and for eps_p, and its porosity (Eq. 24), at every sn
 
     .venv/bin/python bench/nonlocal_particle.py RUN ID [ID ...]
 
-eps_bar is recomputed from the snapshot (all particles of the particle's material within
-2 l_c and their images across the walls, the cubic spline of Eq. (21), volume weights),
-as the kernel does each step. Shows why `retrogressive_k0_0.5` with l_c = 1.2 m at
-dx = 0.566 m stopped with a porosity of 0 while psi decayed with eps_hat (README
-"Convergence of the landslide answers").
+eps_bar and eps_hat are computed from the snapshot by the solver's kernel
+(`nonlocal_strain`, with the walls' images), as each step does. Shows why
+`retrogressive_k0_0.5` with l_c = 1.2 m at dx = 0.566 m stopped with a porosity of 0
+while psi decayed with eps_hat (README "Convergence of the landslide answers").
 """
 
 import math
@@ -22,26 +21,29 @@ ROOT = Path(__file__).parent.parent
 sys.path.insert(0, str(ROOT))
 
 from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.kernels.spline import w_cubic  # noqa: E402
+from psph.kernels.neighbours import cell_lists_indexed  # noqa: E402
+from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
+from psph.scene_boundaries import plane_walls  # noqa: E402
 
-SIDES = {"left": (0, 0), "right": (0, 1), "bottom": (1, 0), "top": (1, 1)}
 
-
-def mirrors(x: np.ndarray, walls: list[tuple[int, float]]) -> list[np.ndarray]:
-    """x, its images across each wall (axis, position) and across two walls of different
-    axes (a corner), as `nonlocal_strain` sums them."""
-    out = [x]
-    for k, (ax, pos) in enumerate(walls):
-        y = x.copy()
-        y[:, ax] = 2.0 * pos - y[:, ax]
-        out.append(y)
-        for bx, pos_b in walls[k + 1:]:
-            if bx != ax:
-                z = y.copy()
-                z[:, bx] = 2.0 * pos_b - z[:, bx]
-                out.append(z)
-    return out
+def nonlocal_of(snapshot: dict, i: int, lengths: np.ndarray, weights: np.ndarray,
+                walls) -> float:
+    """eps_hat of row i of a snapshot from the kernel `nonlocal_strain` (all rows real;
+    row i moved first, the only owned one)."""
+    n = len(snapshot["id"])
+    rows = np.r_[i, np.delete(np.arange(n), i)]
+    x = np.ascontiguousarray(snapshot["x"][rows], float)
+    cell = 0.5 * float(lengths.max())  # any cell size: `rings` covers 2 l_c
+    cell_of, cell_start, order, ncell = cell_lists_indexed(x, 0.5 * cell)
+    out = np.zeros(1)
+    nonlocal_strain(1, n, x, np.ascontiguousarray(snapshot["vol"][rows], float),
+                    np.ascontiguousarray(snapshot["eps_p"][rows], float),
+                    np.ascontiguousarray(snapshot["material"][rows], float), lengths,
+                    weights, cell_of, cell_start, order, ncell,
+                    rings_for(float(lengths.max()), cell),
+                    np.zeros(int(ncell[0] * ncell[1]), np.int8), walls.axis, walls.pos, out)
+    return float(out[0])
 
 
 def history(run: Path, pid: int) -> list[dict]:
@@ -49,34 +51,24 @@ def history(run: Path, pid: int) -> list[dict]:
     from eps_p, and porosity of particle `pid`."""
     scene = run_scene(run)
     mats = scene.material_list
-    walls = [(axis, (scene.domain.min, scene.domain.max)[end][axis])
-             for side, (axis, end) in SIDES.items()
-             if getattr(scene.boundaries, side).motion != "free"]
+    walls = plane_walls(scene.boundaries, scene.domain.min, scene.domain.max)
+    regs = [m.plasticity.regularisation if m.plasticity is not None else None for m in mats]
+    lengths = np.array([r.length if r is not None else 0.0 for r in regs])
+    weights = np.array([r.m if r is not None else 1.0 for r in regs])
     rows = []
     for s in read_snapshots(run / "particles.h5"):
         hit = np.flatnonzero(s["id"] == pid)
         if not len(hit):
             continue
         i = int(hit[0])
-        mat = mats[int(s["material"][i])]
-        reg = mat.plasticity.regularisation
-        if reg is None:
+        k = int(s["material"][i])
+        mat = mats[k]
+        if regs[k] is None:
             raise SystemExit(f"{run}: material {mat.name!r} has no regularisation")
-        lc, m = reg.length, reg.m
-        x = s["x"]
-        d = np.linalg.norm(x - x[i], axis=1)
-        near = np.flatnonzero((d < 2.0 * lc) & (s["material"] == s["material"][i]))
-        num = den = 0.0
-        for images in mirrors(x[near], walls):
-            r = np.linalg.norm(images - x[i], axis=1)
-            w = s["vol"][near] * np.array([w_cubic(q, lc) if q < 2.0 * lc else 0.0
-                                           for q in r])
-            num += float(w @ s["eps_p"][near])
-            den += float(w.sum())
-        bar = num / den
-        hat = max((1.0 - m) * s["eps_p"][i] + m * bar, 0.0)
+        bar = nonlocal_of(s, i, lengths, np.ones_like(weights), walls)  # m = 1: eps_bar
+        hat = nonlocal_of(s, i, lengths, weights, walls)
         psi0, s_f = mat.plasticity.psi, mat.plasticity.s_f
-        rows.append({"time_s": float(s["time"]), "x": x[i].tolist(),
+        rows.append({"time_s": float(s["time"]), "x": s["x"][i].tolist(),
                      "eps_p": float(s["eps_p"][i]), "eps_bar": bar, "eps_hat": hat,
                      "psi_hat_deg": psi0 * math.exp(-s_f * hat),
                      "psi_local_deg": psi0 * math.exp(-s_f * s["eps_p"][i]),

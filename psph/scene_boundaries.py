@@ -8,8 +8,9 @@ profile z(x) (x strictly increasing), "left" or "right" for a wall x(z) (z stric
 increasing). The boundary particles fill the other side.
 """
 
-from typing import Annotated, Literal
+from typing import Annotated, Literal, NamedTuple
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from psph.errors import SceneRule
@@ -84,3 +85,32 @@ class Boundaries(_Model):
                 raise SceneRule(f"{key}.friction_angle", phi,
                                 f"only with motion = 'friction' (motion is '{line.motion}')")
         return self
+
+
+_SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
+              "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
+
+
+class PlaneWalls(NamedTuple):
+    """The sides of the domain box that are walls (motion not "free"), in the order left,
+    right, bottom, top: the plane x[axis] = pos, the sign of the soil's side, fixed or
+    free-slip."""
+
+    sides: list[str]
+    axis: np.ndarray
+    pos: np.ndarray
+    sign: np.ndarray
+    fixed: np.ndarray
+
+
+def plane_walls(boundaries: Boundaries, lo, hi) -> PlaneWalls:
+    """The walls of `boundaries` on the domain box [lo, hi] (`domain.min`, `domain.max`)."""
+    walls = [(side, b) for side in _SIDE_WALL
+             if (b := getattr(boundaries, side)).motion != "free"]
+    ends = (lo, hi)
+    return PlaneWalls(
+        [side for side, _ in walls],
+        np.array([_SIDE_WALL[s][0] for s, _ in walls], np.int64),
+        np.array([ends[_SIDE_WALL[s][1]][_SIDE_WALL[s][0]] for s, _ in walls], float),
+        np.array([_SIDE_WALL[s][2] for s, _ in walls], float),
+        np.array([b.motion == "fixed" for _, b in walls], np.bool_))

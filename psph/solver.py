@@ -59,13 +59,11 @@ from psph.physics.material import (
 )
 from psph.pressure_solve import PressureSolve
 from psph.scene import Scene
+from psph.scene_boundaries import plane_walls
 from psph.scenes.geometry import inside_polygon
 from psph.scenes.lattice import extent, seed
 from psph.softening import nonlocal_softening
 from psph.stepping import TimeStepping, time_stepping  # noqa: F401  (re-exported)
-
-_SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
-              "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
 
 
 @dataclass
@@ -114,17 +112,13 @@ class Simulation:
         if fresh:
             self.store.u[:] = 0.0
 
-        walls = [(side, b) for side in ("left", "right", "bottom", "top")
-                 if (b := getattr(scene.boundaries, side)).motion != "free"]
         lo, hi = scene.domain.min, scene.domain.max
-        self.wall_axis = np.array([_SIDE_WALL[s][0] for s, _ in walls], np.int64)
-        self.wall_pos = np.array([(lo, hi)[_SIDE_WALL[s][1]][_SIDE_WALL[s][0]]
-                                  for s, _ in walls], float)
-        self.wall_sign = np.array([_SIDE_WALL[s][2] for s, _ in walls], float)
-        self.wall_fixed = np.array([b.motion == "fixed" for _, b in walls], np.bool_)
+        walls = plane_walls(scene.boundaries, lo, hi)
+        self.wall_axis, self.wall_pos = walls.axis, walls.pos
+        self.wall_sign, self.wall_fixed = walls.sign, walls.fixed
         # ghost velocities as on a free-slip wall, for the stretching rates (interactions.py);
         # without a fixed wall they are the velocities themselves
-        nw = len(walls)  # polyline boundary particles: sort keys above every ghost's
+        nw = len(walls.sides)  # polyline boundary particles: sort keys above every ghost's
         self.polylines = PolylineBoundaries(scene, float(self.n_ids) * (1 + nw + nw * nw)) \
             if scene.boundaries.polylines else None
         self.halo = halo_width(scene)
@@ -133,7 +127,7 @@ class Simulation:
         self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
         # the initial lattice's extent, also on a restart (x - u of a checkpoint is not
         # its bits): from this slab's share of it
-        self.drainage = Drainage(scene, [side for side, _ in walls], lambda: extent(
+        self.drainage = Drainage(scene, walls.sides, lambda: extent(
             data["x"] if fresh else seed(scene, *slabs.slab, reducer=slabs.reducer)[0],
             slabs.reducer))
         self.pressure_solve = PressureSolve(self)

@@ -78,6 +78,10 @@ def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, 
             out[i] = eps_p[i]
             continue
         support2 = 4.0 * lc * lc
+        near_walls = 0  # bit a: i within 2 l_c of wall a, whose images can reach it
+        for a in range(nw):
+            if abs(x[i, wall_axis[a]] - wall_pos[a]) < 2.0 * lc:
+                near_walls |= 1 << a
         num = 0.0
         den = 0.0
         for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
@@ -96,15 +100,15 @@ def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, 
                     num += w * eps_p[j]
                     den += w
                     for a in range(nw):
-                        ax = wall_axis[a]
-                        if abs(x[i, ax] - wall_pos[a]) >= 2.0 * lc:
+                        if not (near_walls >> a) & 1:
                             continue
+                        ax = wall_axis[a]
                         g = _image_weight(x, i, j, ax, wall_pos[a], -1, 0.0, vol[j], lc)
                         num += g * eps_p[j]
                         den += g
                         for b in range(a + 1, nw):  # the corner image across both
                             bx = wall_axis[b]
-                            if bx == ax or abs(x[i, bx] - wall_pos[b]) >= 2.0 * lc:
+                            if bx == ax or not (near_walls >> b) & 1:
                                 continue
                             g = _image_weight(x, i, j, ax, wall_pos[a], bx, wall_pos[b],
                                               vol[j], lc)
