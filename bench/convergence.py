@@ -182,20 +182,30 @@ def run_case(case: dict, out: Path) -> dict:
 def adopt_run(case: dict, run: Path) -> dict:
     """A case from a finished run directory (`--adopt LABEL DIR`) instead of running it
     again: only when the scene that run wrote (DIR/scene.toml) is the case's scene with
-    its overrides, value for value, and the run went from t = 0 to its end in one go
-    (its wall time is then the case's); SystemExit otherwise. The code that ran it is not
-    checked: adopt a run made with the code of the other cases."""
+    its overrides, value for value, up to what a restart may change besides `time.end`
+    (output, checkpoint, decomposition, description: `psph.restart_rules`), and the run
+    went from t = 0 to its end in one go (its wall time is then the case's); SystemExit
+    otherwise. The code that ran it is not checked: adopt a run made with the code of
+    the other cases."""
     from psph.errors import SceneError
+    from psph.restart_rules import physics_difference
     from psph.scene import load_scene, run_scene, to_toml
 
     run = run.resolve()
+    scene = load_scene(case["scene"], case["sets"])
     try:
-        written = to_toml(run_scene(run))
+        written = run_scene(run)
         summary = json.loads((run / "summary.json").read_text())
+        diff = physics_difference(to_toml(written), scene, f"{run}/scene.toml")
     except (OSError, SceneError, ValueError) as err:
         raise SystemExit(f"--adopt: {run}: {err}") from None
-    if written != to_toml(load_scene(case["scene"], case["sets"])):
-        raise SystemExit(f"--adopt: {run}/scene.toml is not the scene of '{case['label']}'")
+    if diff is not None:
+        key, want, ran = diff
+        raise SystemExit(f"--adopt: {run} ran {key} = {ran!r}, the case '{case['label']}' "
+                         f"has {want!r}")
+    if written.time.end != scene.time.end:
+        raise SystemExit(f"--adopt: {run} ran to {written.time.end} s, the case to "
+                         f"{scene.time.end} s")
     if summary.get("status") != "finished" or "restarted_from" in summary:
         raise SystemExit(f"--adopt: {run} is not one finished run from t = 0 (status "
                          f"{summary.get('status')!r}, restarted from "

@@ -12,9 +12,21 @@ RESTART_MUTABLE = ("description", "time.end", "output", "checkpoint", "decomposi
 
 def check_restart_scene(saved_toml: str, scene: Scene, label: str) -> None:
     """A restart continues the same physics: every key outside RESTART_MUTABLE must equal
-    the checkpoint's. Raises SceneError naming the first key that differs. The saved scene
-    is validated first, so a key added since the checkpoint was written (whose default
-    keeps the old behaviour) compares as its default."""
+    the checkpoint's. Raises SceneError naming the first key that differs."""
+    diff = physics_difference(saved_toml, scene, label)
+    if diff is not None:
+        key, now, saved = diff
+        raise SceneError(
+            f"{label}: {key} = {now!r} differs from the checkpoint's {saved!r}; rule: a "
+            f"restart may only change {', '.join(RESTART_MUTABLE)}")
+
+
+def physics_difference(saved_toml: str, scene: Scene, label: str
+                       ) -> tuple[str, object, object] | None:
+    """The first key outside RESTART_MUTABLE where `scene` differs from the scene
+    `saved_toml` (key, scene's value, saved value), or None. The saved scene is validated
+    first (SceneError naming `label` if it is not valid), so a key added since it was
+    written (whose default keeps the old behaviour) compares as its default."""
     saved = _flatten(resolve(validate(tomllib.loads(saved_toml), label))
                      .model_dump(exclude_none=True))
     now = _flatten(scene.model_dump(exclude_none=True))
@@ -22,10 +34,8 @@ def check_restart_scene(saved_toml: str, scene: Scene, label: str) -> None:
         if any(key == m or key.startswith(m + ".") for m in RESTART_MUTABLE):
             continue
         if saved.get(key) != now.get(key):
-            raise SceneError(
-                f"{label}: {key} = {now.get(key)!r} differs from the checkpoint's "
-                f"{saved.get(key)!r}; rule: a restart may only change "
-                f"{', '.join(RESTART_MUTABLE)}")
+            return key, now.get(key), saved.get(key)
+    return None
 
 
 def _flatten(d: dict, prefix: str = "") -> dict:
