@@ -87,6 +87,7 @@ class Boundaries(_Model):
         return self
 
 
+# side: (axis, end of the box: 0 min, 1 max, sign of the soil's side)
 _SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
               "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
 

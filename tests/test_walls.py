@@ -140,3 +140,17 @@ def test_a_lid_takes_no_weight():
     gh = np.arange(n, n + ng)
     assert ng > 0 and np.all(x[gh, 1] > 1.0)
     assert np.array_equal(stress[gh, :3], stress[src[gh], :3])
+
+
+def test_plane_walls_are_the_sides_that_move_not_freely():
+    """`plane_walls`: each side whose motion is not "free", in the order left, right,
+    bottom, top, as the plane x[axis] = pos of the domain box, the sign of the soil's side
+    and whether it is fixed (no-slip)."""
+    from psph.scene_boundaries import Boundaries, Boundary, plane_walls
+
+    walls = plane_walls(Boundaries(right=Boundary(motion="slip"),
+                                   bottom=Boundary(motion="fixed")), [1.0, -2.0], [5.0, 3.0])
+    assert walls.sides == ["right", "bottom"]
+    assert walls.axis.tolist() == [0, 1] and walls.pos.tolist() == [5.0, -2.0]
+    assert walls.sign.tolist() == [-1.0, 1.0] and walls.fixed.tolist() == [False, True]
+    assert plane_walls(Boundaries(), [0.0, 0.0], [1.0, 1.0]).sides == []
