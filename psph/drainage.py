@@ -17,9 +17,7 @@ import numpy as np
 
 from psph.kernels.exact_sum import EXPANSION_CAP, local_parts, sum_expansion
 from psph.kernels.images import row_displacement
-
-# side -> (axis, which end of the domain (0 min, 1 max), sign: +1 soil at larger x[axis])
-SIDES = {"left": (0, 0, 1.0), "right": (0, 1, -1.0), "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
+from psph.scene_boundaries import SIDE_PLANES as SIDES
 
 
 class Drainage:

@@ -87,8 +87,8 @@ class Boundaries(_Model):
         return self
 
 
-# side: (axis, end of the box: 0 min, 1 max, sign of the soil's side)
-_SIDE_WALL = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
+# side -> (axis, which end of the domain (0 min, 1 max), sign: +1 soil at larger x[axis])
+SIDE_PLANES = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
               "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
 
 
@@ -106,12 +106,12 @@ class PlaneWalls(NamedTuple):
 
 def plane_walls(boundaries: Boundaries, lo, hi) -> PlaneWalls:
     """The walls of `boundaries` on the domain box [lo, hi] (`domain.min`, `domain.max`)."""
-    walls = [(side, b) for side in _SIDE_WALL
+    walls = [(side, b) for side in SIDE_PLANES
              if (b := getattr(boundaries, side)).motion != "free"]
     ends = (lo, hi)
     return PlaneWalls(
         [side for side, _ in walls],
-        np.array([_SIDE_WALL[s][0] for s, _ in walls], np.int64),
-        np.array([ends[_SIDE_WALL[s][1]][_SIDE_WALL[s][0]] for s, _ in walls], float),
-        np.array([_SIDE_WALL[s][2] for s, _ in walls], float),
+        np.array([SIDE_PLANES[s][0] for s, _ in walls], np.int64),
+        np.array([ends[SIDE_PLANES[s][1]][SIDE_PLANES[s][0]] for s, _ in walls], float),
+        np.array([SIDE_PLANES[s][2] for s, _ in walls], float),
         np.array([b.motion == "fixed" for _, b in walls], np.bool_))
