@@ -37,7 +37,8 @@ run-out at the smallest dt fraction that has one, else the finest run.
     .venv/bin/python bench/convergence.py --table-only # table and PNG from the JSON
     .venv/bin/python bench/convergence.py --table-only \
         --adopt 'retrogressive_k0_0.5 scene local dx=0.4 dt=1' runs/k05_cutoff
-        # a case from a finished run whose scene.toml is the case's scene, value for value
+        # a case from a finished run of the case's scene (scene.toml value for value but
+        # description, checkpoint and output; other snapshot times: last-snapshot metrics)
 
 Prints a table, writes bench/out/convergence[-quick].json (one entry per case, kept
 between runs: a case already measured is not run again unless --rerun) and draws
