@@ -21,29 +21,24 @@ ROOT = Path(__file__).parent.parent
 sys.path.insert(0, str(ROOT))
 
 from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.kernels.neighbours import cell_lists_indexed  # noqa: E402
-from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
 from psph.scene_boundaries import plane_walls  # noqa: E402
+from psph.verify.nonlocal_average import nonlocal_strains  # noqa: E402
 
 
-def nonlocal_of(snapshot: dict, i: int, lengths: np.ndarray, weights: np.ndarray,
-                walls) -> float:
-    """eps_hat of row i of a snapshot from the kernel `nonlocal_strain` (all rows real;
-    row i moved first, the only owned one)."""
+def averages_of(snapshot: dict, i: int, lengths: np.ndarray, weights: np.ndarray,
+                walls) -> tuple[float, float]:
+    """(eps_bar, eps_hat) of row i of a snapshot from the kernel `nonlocal_strain` (all
+    rows real; row i moved first, the only owned one), one set of cell lists for both."""
     n = len(snapshot["id"])
     rows = np.r_[i, np.delete(np.arange(n), i)]
-    x = np.ascontiguousarray(snapshot["x"][rows], float)
-    cell = 0.5 * float(lengths.max())  # any cell size: `rings` covers 2 l_c
-    cell_of, cell_start, order, ncell = cell_lists_indexed(x, 0.5 * cell)
-    out = np.zeros(1)
-    nonlocal_strain(1, n, x, np.ascontiguousarray(snapshot["vol"][rows], float),
-                    np.ascontiguousarray(snapshot["eps_p"][rows], float),
-                    np.ascontiguousarray(snapshot["material"][rows], float), lengths,
-                    weights, cell_of, cell_start, order, ncell,
-                    rings_for(float(lengths.max()), cell),
-                    np.zeros(int(ncell[0] * ncell[1]), np.int8), walls.axis, walls.pos, out)
-    return float(out[0])
+    bar, hat = nonlocal_strains(snapshot["x"][rows], snapshot["vol"][rows],
+                                snapshot["eps_p"][rows], lengths,
+                                [np.ones_like(weights), weights],
+                                material=snapshot["material"][rows], n_owned=1,
+                                walls=list(zip(walls.axis.tolist(), walls.pos.tolist(),
+                                               strict=True)))
+    return float(bar[0]), float(hat[0])
 
 
 def history(run: Path, pid: int) -> list[dict]:
@@ -65,8 +60,7 @@ def history(run: Path, pid: int) -> list[dict]:
         mat = mats[k]
         if regs[k] is None:
             raise SystemExit(f"{run}: material {mat.name!r} has no regularisation")
-        bar = nonlocal_of(s, i, lengths, np.ones_like(weights), walls)  # m = 1: eps_bar
-        hat = nonlocal_of(s, i, lengths, weights, walls)
+        bar, hat = averages_of(s, i, lengths, weights, walls)
         psi0, s_f = mat.plasticity.psi, mat.plasticity.s_f
         rows.append({"time_s": float(s["time"]), "x": s["x"][i].tolist(),
                      "eps_p": float(s["eps_p"][i]), "eps_bar": bar, "eps_hat": hat,

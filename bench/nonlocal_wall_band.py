@@ -17,8 +17,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent.parent))
 
-from psph.kernels.neighbours import cell_lists_indexed  # noqa: E402
-from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for  # noqa: E402
+from psph.verify.nonlocal_average import nonlocal_strains  # noqa: E402
 
 DX = 1.0
 RATIOS = (1.5, 2.12, 3.0)
@@ -31,13 +30,8 @@ def band_on_wall(rows: int, ratio: float, m: float) -> np.ndarray:
     x = np.array(np.meshgrid(g, g[:20], indexing="xy")).reshape(2, -1).T.copy()
     n = len(x)
     eps = np.where(x[:, 1] < rows * DX, 10.0, 0.0)
-    h = 0.6 * DX
-    cell_of, cell_start, order, ncell = cell_lists_indexed(x, h)
-    out = np.zeros(n)
-    nonlocal_strain(n, n, x, np.full(n, DX * DX), eps, np.zeros(n), np.array([ratio * DX]),
-                    np.array([m]), cell_of, cell_start, order, ncell,
-                    rings_for(ratio * DX, 2 * h), np.zeros(int(ncell[0] * ncell[1]), np.int8),
-                    np.array([1], np.int64), np.array([0.0]), out)
+    out = nonlocal_strains(x, np.full(n, DX * DX), eps, [ratio * DX], [[m]], walls=[(1, 0.0)],
+                           h=0.6 * DX)[0]
     column = np.flatnonzero(np.abs(x[:, 0] - 20.5 * DX) < 1e-9)
     column = column[np.argsort(x[column, 1])]
     return out[column[:rows + 1]]

@@ -9,8 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from psph.kernels.neighbours import cell_lists_indexed
-from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
+from psph.verify.nonlocal_average import nonlocal_strains
 from psph.verify.softening_band import softening_band
 from tests.helpers import assert_bad_input
 
@@ -25,18 +24,8 @@ def _lattice(side: int = 31) -> np.ndarray:
 
 def _average(x, eps, lengths, weights, material=None, n_owned=None, walls=()):
     """eps_hat of every particle; walls: (axis, position) pairs whose images enter."""
-    n = len(x)
-    material = np.zeros(n) if material is None else material
-    assert material.max() < len(lengths)  # the kernel reads lengths[material] unchecked
-    cell_of, cell_start, order, ncell = cell_lists_indexed(x, H)
-    out = np.full(n, np.nan)
-    nonlocal_strain(n if n_owned is None else n_owned, n, x, np.full(n, DX * DX), eps,
-                    material, np.asarray(lengths, float), np.asarray(weights, float), cell_of,
-                    cell_start, order, ncell, rings_for(max(lengths), 2 * H),
-                    np.zeros(int(ncell[0] * ncell[1]), np.int8),
-                    np.array([a for a, _ in walls], np.int64),
-                    np.array([p for _, p in walls], float), out)
-    return out
+    return nonlocal_strains(x, np.full(len(x), DX * DX), eps, lengths, [weights],
+                            material=material, n_owned=n_owned, walls=walls, h=H)[0]
 
 
 @pytest.mark.parametrize("length", [0.15, 0.35])  # support 2 l_c: 3 dx (2 rings), 7 dx (3)

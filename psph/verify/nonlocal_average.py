@@ -1,0 +1,47 @@
+"""The non-local softening variable of a set of particles, offline: the solver's kernel
+(`psph/kernels/nonlocal_strain.py`) with its cell lists built once, for one or more
+weight sets m (m = 1: the plain average eps_bar; the material's m: eps_hat).
+
+Used by the regularisation tests and by the benches that look into a band
+(`bench/nonlocal_wall_band.py`, `bench/nonlocal_particle.py`).
+"""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from psph.kernels.neighbours import cell_lists_indexed
+from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
+
+
+def nonlocal_strains(x: np.ndarray, vol: np.ndarray, eps_p: np.ndarray,
+                     lengths: Sequence[float], weight_sets: Sequence[Sequence[float]], *,
+                     material: np.ndarray | None = None, n_owned: int | None = None,
+                     walls: Sequence[tuple[int, float]] = (),
+                     h: float | None = None) -> list[np.ndarray]:
+    """eps_hat of rows 0..n_owned-1 (default: every row; the rest NaN) for each weight
+    set (m per material), all rows real. lengths[k]: l_c of material k (0: local);
+    walls: (axis, position) planes whose images enter; h: half the cell side (default
+    l_c / 4: any size works, the kernel searches the rings that cover 2 l_c)."""
+    n = len(x)
+    x = np.ascontiguousarray(x, float)
+    material = np.zeros(n) if material is None else np.ascontiguousarray(material, float)
+    lengths = np.asarray(lengths, float)
+    if material.size and material.max() >= len(lengths):
+        raise ValueError("material index beyond the lengths table")  # the kernel reads it
+    h = 0.25 * float(lengths.max()) if h is None else h
+    cell_of, cell_start, order, ncell = cell_lists_indexed(x, h)
+    rings = rings_for(float(lengths.max()), 2 * h)
+    scratch = np.zeros(int(ncell[0] * ncell[1]), np.int8)
+    axis = np.array([a for a, _ in walls], np.int64)
+    pos = np.array([p for _, p in walls], float)
+    owned = n if n_owned is None else n_owned
+    out = []
+    for weights in weight_sets:
+        hat = np.full(n, np.nan)
+        nonlocal_strain(owned, n, x, np.ascontiguousarray(vol, float),
+                        np.ascontiguousarray(eps_p, float), material, lengths,
+                        np.asarray(weights, float), cell_of, cell_start, order, ncell, rings,
+                        scratch, axis, pos, hat)
+        out.append(hat)
+    return out
