@@ -116,7 +116,7 @@ def largest_dt(scene_name: str, scheme: str, dx: float, sets: list[str]) -> floa
     # a small time.dt: the scene's own may be beyond this scheme's limits
     scene = load_scene(scene_name, sets + [f"particles.dx={dx!r}", "time.dt=1e-9"])
     cap = solid_dt_limit(scene)
-    if scheme == "tpi":  # the scene's (the paper's) step, inside TPI's bound
+    if scheme.startswith("tpi"):  # the scene's (the paper's) step, inside TPI's bound
         return min(cap, tpi_gain_dt_limit(scene), own or math.inf)
     if scheme == "explicit":
         return min(cap, fluid_dt_limit(scene), undrained_dt_limit(scene))
@@ -131,7 +131,7 @@ def cases(quick: bool) -> list[dict]:
         plan = [("collapse_dry", "dry", QUICK_SETS, QUICK_DX, (1.0,))]
     else:
         plan = [("collapse_saturated_psi0", s, [], DX, (1.0,) if s == "explicit" else FRACTIONS)
-                for s in ("tpi", "projection", "explicit")]
+                for s in ("tpi", "tpi-beta0", "projection", "explicit")]
         plan.append(("collapse_dry", "dry", [], DX, FRACTIONS))
         plan.append(("retrogressive_k0_0.5", "scene", [], SLOPE_DX, (1.0,)))
     for scene, scheme, base, dxs, fractions in plan:
@@ -140,6 +140,8 @@ def cases(quick: bool) -> list[dict]:
             sets += ["pressure.scheme='projection'", "pressure.tolerance=1e-6"]
         elif scheme == "explicit":
             sets += ["pressure.scheme='explicit'"]
+        elif scheme == "tpi-beta0":  # Eq. (47) off: its branch makes TPI step-dependent
+            sets += ["pressure.beta=0.0"]
         for law in ("local", "regularised"):
             length = SLOPE_L_C if scene.startswith("retrogressive") else L_C
             law_sets = sets + (regularised(length) if law == "regularised" else [])
