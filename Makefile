@@ -23,7 +23,7 @@ DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
-	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-field \
+	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-eq47-step bench-field \
 	bench-field-window bench-large bench-convergence bench-convergence-quick lint clean-env
 
 env: $(STAMP)
@@ -91,6 +91,10 @@ bench-tpi-gravity: env
 # the dilative saturated collapse with and without Eq. (47), side by side (Fig. 16)
 bench-collapse-beta: env
 	$(VPY) bench/collapse_beta.py
+
+# the saturated collapse's first 10 ms at two steps: Eq. (47), beta = 0, alpha = 0, projection
+bench-eq47-step: env
+	$(VPY) bench/eq47_step.py
 
 # Section 4.5 clay slope on 2 ranks: the full 40 s (about 25 min) or a 0.5 s window
 bench-field: env
