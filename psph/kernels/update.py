@@ -201,9 +201,9 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     n_min (0: none), the Drucker-Prager flag and parameters (issue 16);
     bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
-    1 explicit Eq. (25), 2 TPI Eq. (38), with Eq. (47) for p < 0 when beta > 0 (alpha,
-    beta: Eq. 39 and 47), 3 projection (p already solved); p = 0 is imposed where
-    drained_from <= t.
+    1 explicit Eq. (25), 2 TPI Eq. (38), with the storage of Eq. (47) below zero when
+    beta > 0 (alpha, beta: Eq. 39 and 47; `tpi_pressure`), 3 projection (p already
+    solved); p = 0 is imposed where drained_from <= t.
     plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
     whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
     psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
