@@ -9,8 +9,9 @@ For `collapse_saturated_psi0` and `collapse_dry` (Section 4.4), dx in {0.04, 0.0
 projection); for TPI the scene's own 2e-5 s (the paper's; 82 % of TPI's bound under
 gravity, `limits.tpi_gain_dt_limit`, 2.43e-5 s at alpha = 0.5, below the cap at every
 dx); for explicit Eq. (42) and the undrained wave limit (only that step: about 4e-6 s at
-dx = 0.04, 1e-6 s at 0.02, a million steps). Every case runs on 2 ranks to the scene's
-end (1.2 s saturated, 2 s dry).
+dx = 0.04, 1e-6 s at 0.02, a million steps); "tpi-beta0" is TPI with Eq. (47) off
+(`pressure.beta = 0`), for the storage's part in the answer. Every case runs on 2 ranks
+to the scene's end (1.2 s saturated, 2 s dry).
 
 For `retrogressive_k0_0.5` (Section 4.5): dx = 0.4 m (the paper's) and 0.4 sqrt 2 =
 0.566 m (half the particles), local and regularised with l_c = 1.2 m (3 dx and 2.1 dx),
