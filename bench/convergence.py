@@ -141,7 +141,7 @@ def cases(quick: bool) -> list[dict]:
             sets += ["pressure.scheme='projection'", "pressure.tolerance=1e-6"]
         elif scheme == "explicit":
             sets += ["pressure.scheme='explicit'"]
-        elif scheme == "tpi-beta0":  # Eq. (47) off: its branch makes TPI step-dependent
+        elif scheme == "tpi-beta0":  # Eq. (47) off: the suction storage's part in the answer
             sets += ["pressure.beta=0.0"]
         for law in ("local", "regularised"):
             length = SLOPE_L_C if scene.startswith("retrogressive") else L_C

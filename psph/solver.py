@@ -427,8 +427,8 @@ class Simulation:
                       st.drained_from, self.drainage.layer_clock(self.t), st.load_index,
                       st.traction, self.load_value, self.dt,
                       self.mat, st.material, s.K_l, s.gamma_l, s.rho_l, self.body[0],
-                      self.body[1], self.damping, self.scheme, self.scene.pressure.alpha,
-                      self.scene.pressure.beta, self.acc_term,
+                      self.body[1], self.damping, self.scheme, self.scene.pressure.beta,
+                      self.acc_term,
                       self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
                       st.eps_p, self.softening.eps_hat if self.softening else st.eps_p,
                       self.ponding, self.symplectic, st.plastic_work)

@@ -37,7 +37,7 @@ def _drive(grad: np.ndarray, steps: int, dt: float, dp: np.ndarray | None) -> di
         bad = advance(1, sums, x, u, v, stress, z(1), z(1), 0.4 * one, 0.4 * one, one, one,
                       2000.0 * one, z(1), acc, np.full(1, np.inf), k * dt,
                       np.full(1, -1.0), z((1, 2)), z(1), dt, mat, z(1), 2e9, 9810.0,
-                      1000.0, 0.0, 0.0, 0.0, SCHEME_NONE, 0.0, 0.0, False, True,
+                      1000.0, 0.0, 0.0, 0.0, SCHEME_NONE, 0.0, False, True,
                       np.array([-1e3, -1e3, 1e3, 1e3]), dp is not None, eps_p, eps_p, 0,
                       True, work)
         assert bad < 0

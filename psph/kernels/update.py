@@ -52,7 +52,7 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, beta, dt):
     Eq. (39) already summed in sum_ap = sum_j A_ij p~_j; with beta > 0, the storage of
     Eq. (47) where the pressure is negative, taken as the implicit step of
 
-        beta (min(p^(t+1), 0) - min(p^t, 0)) / dt + sum_j A_ij p^(t+1) = B_i + sum_ap,
+        beta (min(p^(t+1), 0) - min(p^t, 0)) / dt + (sum_j A_ij) p^(t+1) = B_i + sum_ap,
 
     a storage beta d min(p, 0) / dt. Its left side grows with p^(t+1), so the root is
     one: the numerator N = B_i + sum_ap + beta min(p^t, 0) / dt over sum_a (N >= 0) or
@@ -66,7 +66,7 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, beta, dt):
     extrapolation carried every step's change on by alpha / (1 - alpha) again. The suction
     so held was set by the step: the saturated collapse at dt and dt / 2 differed by
     1.7x in its most negative p after 1 ms and by 31 % in kinetic energy after 10 ms,
-    where this form agrees to 2 % and 0.4 % (README, "Eq. (47) and the time step")."""
+    where this form agrees to 2 % and 0.3 % (README, "Eq. (47) and the time step")."""
     if beta > 0.0:
         num = b_i + sum_ap + beta * min(p_i, 0.0) / dt
         if num < 0.0:
@@ -190,7 +190,7 @@ def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, 
 @nb.njit(cache=True, error_model="numpy")
 def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
             acc, drained_from, t, load_index, traction, load_value, dt, mat, material,
-            bulk_water, gamma_l, rho_l, b0, b1, damping, scheme, alpha, beta,
+            bulk_water, gamma_l, rho_l, b0, b1, damping, scheme, beta,
             acc_term, correct_strain, box, plastic, eps_p, eps_soft, ponding, kicked,
             plastic_work):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
@@ -202,7 +202,7 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
     (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
     1 explicit Eq. (25), 2 TPI Eq. (38), with the storage of Eq. (47) below zero when
-    beta > 0 (alpha, beta: Eq. 39 and 47; `tpi_pressure`), 3 projection (p already
+    beta > 0 (beta: Eq. 47; `tpi_pressure`; alpha of Eq. 39 is in the sums), 3 projection (p already
     solved); p = 0 is imposed where drained_from <= t.
     plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
     whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,

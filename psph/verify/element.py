@@ -298,7 +298,7 @@ class _SphBlock:
                       st["perm"], st["acc"], self.drained_from, self.t, self.load_index,
                       self.traction, self.load_value, par.dt, self.mat, self.material, par.K_l,
                       par.rho_l * par.g, par.rho_l, 0.0, 0.0, 0.0, SCHEME_EXPLICIT,
-                      0.0, 0.0, False, self.correct_strain, self.box, True,
+                      0.0, False, self.correct_strain, self.box, True,
                       st["eps_p"], st["eps_p"], 0, True, st["plastic_work"])
         if bad >= 0:
             raise FloatingPointError(f"advance flagged particle {bad} at t = {self.t:g} s")
