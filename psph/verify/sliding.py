@@ -106,7 +106,8 @@ def sliding_block(overrides: list[str] | None = None, velocity: float = 10.0,
     the basal traction from the momentum balance (Pa, positive against the motion, from
     the change of the mean velocity over the last `every` steps), the mean DP strength of
     the bottom row, and the mean, 5th percentile and minimum of its excess p
-    (p - p at t = 0, Pa), with the minimum over the whole block."""
+    (p - p at t = 0, Pa), with the minimum over the whole block; the bottom row's mean
+    eps_p and softening variable eps_hat (eps_p with the local law)."""
     from mpi4py import MPI
 
     from psph.run import make_slabs
@@ -138,14 +139,17 @@ def sliding_block(overrides: list[str] | None = None, velocity: float = 10.0,
         traction = -(vbar - v_last) / (sim.t - t_last) * mass / length
         v_last, t_last = vbar, sim.t
         excess = st.p[:n][o] - p0
-        strength = basal_strength(st.stress[:n][o][base], st.eps_p[:n][o][base], sim.dp)
+        hat = sim.softening.eps_hat[:n] if sim.softening else st.eps_p[:n]
+        strength = basal_strength(st.stress[:n][o][base], hat[o][base], sim.dp)
         rows.append({"time": sim.t, "v_mean": vbar, "traction_Pa": traction,
                      "strength_Pa": float(strength.mean()),
                      "base_excess_mean_Pa": float(excess[base].mean()),
                      "base_excess_p05_Pa": float(np.percentile(excess[base], 5)),
                      "base_excess_min_Pa": float(excess[base].min()),
                      "excess_min_Pa": float(excess.min()),
-                     "excess_max_Pa": float(excess.max())})
+                     "excess_max_Pa": float(excess.max()),
+                     "base_eps_p": float(st.eps_p[:n][o][base].mean()),
+                     "base_eps_hat": float(hat[o][base].mean())})
     return {"rows": rows, "mass_per_m": mass, "base_length_m": length,
             "velocity0": velocity}
 
