@@ -10,7 +10,7 @@ basal traction from its momentum balance over the last 0.04 s, the bottom row's 
 Drucker-Prager strength, eps_p and eps_hat (the softening variable the return mapping
 used).
 
-    .venv/bin/python bench/nonlocal_sliding.py     # the table (about a minute, one core)
+    .venv/bin/python bench/nonlocal_sliding.py     # the table (about 15 s, one core)
 
 Cases: the local law, and the non-local one with m = 2 (the default, over-non-local)
 and m = 1 (the plain average). Writes bench/out/nonlocal_sliding.json and .png (basal
@@ -68,7 +68,7 @@ def plot(cases: list[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--length", type=float, default=1.2, help="l_c (m)")
     args = ap.parse_args(argv)
     out = []

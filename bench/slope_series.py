@@ -22,7 +22,7 @@ def load(out: Path) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs", nargs="+", type=Path)
     ap.add_argument("--every", type=float, default=5.0, help="table rows every ... s")
     ap.add_argument("--png", type=Path, default=Path(__file__).parent / "out" /
@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     runs = [load(r) for r in args.runs]
     end = min(r["end"] for r in runs)
-    print("t (s)  " + "  ".join(f"{r['name'][:28]:>28}" for r in runs))
+    print("t (s)  " + "  ".join(f"{r['name'][-28:]:>28}" for r in runs))
     print("       " + "  ".join(f"{'run-out':>13} {'scarp':>14}" for _ in runs))
     t = args.every
     while t <= end + 1e-6:
@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
         t += args.every
     for r in runs:
         print(f"{r['name']}: {r['particles']} particles, to {r['end']:.1f} s, slides at "
-              + ", ".join(f"{s:.0f}" for s in r["slides"]) + " s")
+              + ", ".join(f"{s:.1f}" for s in r["slides"]) + " s")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -58,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     ax[1].set(xlabel="t (s)", ylabel="back scarp x (m)")
     ax[0].legend(fontsize=7)
     fig.tight_layout()
-    args.png.parent.mkdir(exist_ok=True)
+    args.png.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.png, dpi=110)
     print(f"wrote {args.png}")
     return 0

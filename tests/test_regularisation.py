@@ -163,26 +163,25 @@ def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_wit
     2026-12-01, basal traction from the block's momentum at 0.4 s (bottom-row eps_hat):
 
     - m = 1 (plain average): 3.7 and 3.8 kPa (2.03 and 2.26), the base softened at both;
-    - m = 2 (over-non-local, the default): 10.0 and 33.2 kPa (0.55 and 0.22), near the
-      peak at l_c / dx = 3: the slope pair's 196 against 106 m of run-out (README);
+    - m = 2 (over-non-local, the default; the bench): 10.0 and 33.2 kPa (0.55 and 0.22),
+      softening later and more slowly at l_c / dx = 3: the slope pair's 196 against
+      106 m of run-out (README, "The cause of the pair's disagreement");
     - local law: 6.4 and 5.9 kPa.
 
-    The traction is the bottom row's strength at its eps_hat (within 4-15 % in these
-    four cases): the base slides at the strength the average gives it.
+    The traction is the bottom row's strength at its eps_hat (within 4-15 % with m = 1
+    and m = 2): the base slides at the strength the average gives it.
     """
     from psph.verify.sliding import sliding_block
 
     soft = ["material.plasticity.c=55.0e3", "material.plasticity.c_r=0.7e3",
             "material.plasticity.phi_r=5.0", "material.plasticity.eta=5.0"]
+    reg = "material.plasticity.regularisation={kind='nonlocal', length=1.2, m=1.0}"
     traction = {}
-    for m in (1.0, 2.0):
-        for dx in (0.6, 0.4):
-            reg = f"material.plasticity.regularisation={{kind='nonlocal', length=1.2, m={m}}}"
-            rows = sliding_block(soft + [reg], 10.0, 1000, 100, round(9.6 / dx),
-                                 round(4.8 / dx), dx)["rows"]
-            assert "failed" not in rows[-1], rows[-1]
-            traction[m, dx] = rows[-1]["traction_Pa"]
-            assert traction[m, dx] == pytest.approx(rows[-1]["strength_Pa"], rel=0.2)
-    assert traction[1.0, 0.4] == pytest.approx(traction[1.0, 0.6], rel=0.1)
-    assert traction[1.0, 0.4] < 0.1 * 55e3  # softened toward c_r
-    assert traction[2.0, 0.4] > 2.0 * traction[2.0, 0.6]  # follows l_c / dx
+    for dx in (0.6, 0.4):
+        rows = sliding_block(soft + [reg], 10.0, 1000, 100, round(9.6 / dx),
+                             round(4.8 / dx), dx)["rows"]
+        assert "failed" not in rows[-1], rows[-1]
+        traction[dx] = rows[-1]["traction_Pa"]
+        assert traction[dx] == pytest.approx(rows[-1]["strength_Pa"], rel=0.2)
+    assert traction[0.4] == pytest.approx(traction[0.6], rel=0.1)
+    assert traction[0.4] < 0.1 * 55e3  # softened toward c_r

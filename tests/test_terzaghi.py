@@ -18,8 +18,8 @@ COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.
 
 
 # the drained switch's window (0.01-0.03 s); the explicit consolidation to T_v = 0.5
-# (776,417 steps) is the "explicit" row of `bench/time_vs_error.py --quick`, against the
-# same reference and bar (README, "Run time against error")
+# (776,417 steps, four minutes of the suite) is measured, not asserted, by the "explicit"
+# row of `bench/time_vs_error.py --quick` (README, "Run time against error")
 SWITCH_WINDOW = ["verification.tv=[]", "time.end=0.03"]
 
 
@@ -29,7 +29,8 @@ def explicit_run(tmp_path_factory):
     scene = load_scene("terzaghi", COARSE + SWITCH_WINDOW + ["pressure.scheme='explicit'",
                                                              "time.dt=2.8e-7"])
     assert scene.time.dt <= time_stepping(scene).limits["dt_fluid_eq42"]
-    return run(scene, out, quiet=True), out
+    run(scene, out, quiet=True)
+    return out
 
 
 def test_reference_limits():
@@ -80,7 +81,7 @@ def test_no_pressure_spike_at_the_drained_switch(tmp_path, explicit_run):
     base and mid-depth pressures stay inside the explicit run's envelope."""
     run(load_scene("terzaghi", COARSE + SWITCH_WINDOW), tmp_path, quiet=True)
     tpi = _history(tmp_path / "history.csv")
-    exp = _history(explicit_run[1] / "history.csv")
+    exp = _history(explicit_run / "history.csv")
     for h in (tpi, exp):
         h["window"] = (h["time"] > 0.01) & (h["time"] < 0.03)
         assert h["window"].sum() >= 50
