@@ -26,15 +26,13 @@ ROOT = Path(__file__).parent.parent
 sys.path.insert(0, str(ROOT))
 OUT = Path(__file__).parent / "out"
 
-SOFTENING = ["material.plasticity.c=55.0e3", "material.plasticity.c_r=0.7e3",
-             "material.plasticity.phi_r=5.0", "material.plasticity.eta=5.0"]
 HEIGHT, LENGTH = 4.8, 9.6
 
 def case(dx: float, length: float, m: float, steps: int = 1000, every: int = 100) -> dict:
     """One block: `length` = l_c (0: local law) at spacing dx (`sliding_block`'s rows)."""
-    from psph.verify.sliding import sliding_block
+    from psph.verify.sliding import SLOPE_SOFTENING, sliding_block
 
-    over = list(SOFTENING)
+    over = list(SLOPE_SOFTENING)
     if length > 0.0:
         over.append("material.plasticity.regularisation="
                     f"{{kind='nonlocal', length={length}, m={m}}}")

@@ -71,6 +71,10 @@ def test_average_spreads_a_peak_and_keeps_other_materials_local():
     assert 2 * out[centre] - 1.0 < 0.0 and hat[centre] == 0.0
     others = np.arange(n) != centre
     assert np.allclose(hat[others], 2 * out[others], rtol=1e-12, atol=0.0)
+    # every material local: eps_p itself, also with the default cell size (l_c / 4 = 0)
+    for_all = nonlocal_strains(x, np.full(n, DX * DX), eps2, [0.0, 0.0], [[1.0, 1.0]],
+                               material=material, n_owned=n - 3)[0]
+    assert np.array_equal(for_all[:-3], eps2[:-3]) and np.isnan(for_all[-3:]).all()
 
 
 def test_softening_band_energy_is_objective_with_regularisation_only():
@@ -171,14 +175,12 @@ def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_wit
     The traction is the bottom row's strength at its eps_hat (within 4-15 % with m = 1
     and m = 2): the base slides at the strength the average gives it.
     """
-    from psph.verify.sliding import sliding_block
+    from psph.verify.sliding import SLOPE_SOFTENING, sliding_block
 
-    soft = ["material.plasticity.c=55.0e3", "material.plasticity.c_r=0.7e3",
-            "material.plasticity.phi_r=5.0", "material.plasticity.eta=5.0"]
     reg = "material.plasticity.regularisation={kind='nonlocal', length=1.2, m=1.0}"
     traction = {}
     for dx in (0.6, 0.4):
-        rows = sliding_block(soft + [reg], 10.0, 1000, 100, round(9.6 / dx),
+        rows = sliding_block(SLOPE_SOFTENING + [reg], 10.0, 1000, 100, round(9.6 / dx),
                              round(4.8 / dx), dx)["rows"]
         assert "failed" not in rows[-1], rows[-1]
         traction[dx] = rows[-1]["traction_Pa"]

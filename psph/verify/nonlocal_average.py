@@ -29,13 +29,17 @@ def nonlocal_strains(x: np.ndarray, vol: np.ndarray, eps_p: np.ndarray,
     lengths = np.asarray(lengths, float)
     if material.size and material.max() >= len(lengths):
         raise ValueError("material index beyond the lengths table")  # the kernel reads it
+    owned = n if n_owned is None else n_owned
+    if float(lengths.max(initial=0.0)) <= 0.0:  # every material local: eps_hat = eps_p
+        local = np.full(n, np.nan)
+        local[:owned] = np.asarray(eps_p, float)[:owned]
+        return [local.copy() for _ in weight_sets]
     h = 0.25 * float(lengths.max()) if h is None else h
     cell_of, cell_start, order, ncell = cell_lists_indexed(x, h)
     rings = rings_for(float(lengths.max()), 2 * h)
     scratch = np.zeros(int(ncell[0] * ncell[1]), np.int8)
     axis = np.array([a for a, _ in walls], np.int64)
     pos = np.array([p for _, p in walls], float)
-    owned = n if n_owned is None else n_owned
     out = []
     for weights in weight_sets:
         hat = np.full(n, np.nan)

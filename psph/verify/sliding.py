@@ -65,6 +65,11 @@ end = 1.0
 av_alpha = 1.0
 """
 
+# the retrogressive slopes' clay softening (Section 4.5: c 55 -> 0.7 kPa, phi 10 -> 5 deg,
+# eta = 5) as overrides of BLOCK: the block of bench/nonlocal_sliding.py and its test
+SLOPE_SOFTENING = ["material.plasticity.c=55.0e3", "material.plasticity.c_r=0.7e3",
+                   "material.plasticity.phi_r=5.0", "material.plasticity.eta=5.0"]
+
 
 def block_scene(overrides: list[str] | None = None, nx: int = 24, ny: int = 8,
                 dx: float = 0.4):
