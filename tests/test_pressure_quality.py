@@ -17,6 +17,7 @@ from psph.verify.pressure import (
     main,
     mean_effective_stress,
     neighbour_pairs,
+    phreatic_excess,
     pressure_quality,
 )
 
@@ -88,6 +89,37 @@ def test_hydrostatic_pressure_level_and_surface():
                        gamma * (2.0 - x[:, 1]))
 
 
+def test_phreatic_excess_reads_drawdown_as_none_and_suction_as_itself():
+    """A column drained through a free face holds p = 0 above its lowered phreatic line:
+    over the ground surface's table that is negative excess, over the phreatic line none
+    (the paper's Fig. 16 text). Hydrostatic from a lowered level: none. Suction (p < 0)
+    stays excess, all of it; positive excess stays as it was."""
+    x, _, _ = _lattice(10)  # tops at y = 0.95 (centres)
+    gamma = 1000.0 * 9.81
+    scene = _scene("surface")
+    right = x[:, 0] > 0.5
+    hydro = gamma * (0.95 - x[:, 1])
+
+    def both(p):
+        snap = {"x": x, "p": p}
+        return excess_pressure(snap, scene), phreatic_excess(snap, scene)
+
+    ex, ph = both(hydro)
+    assert np.allclose(ex, 0.0) and np.allclose(ph, 0.0)
+    drained = np.where(right, 0.0, hydro)
+    ex, ph = both(drained)
+    assert np.allclose(ex[right], -hydro[right]) and np.allclose(ph, 0.0)
+    lowered = np.where(right, gamma * np.maximum(0.45 - x[:, 1], 0.0), hydro)
+    ex, ph = both(lowered)
+    assert ex[right].min() < -4e3 and np.allclose(ph, 0.0, atol=1e-9)
+    suction = np.where(right, -5e3, hydro)
+    ex, ph = both(suction)
+    assert np.allclose(ph[right], -5e3) and np.allclose(ph[~right], 0.0)
+    bump = hydro + np.where(right & (x[:, 1] < 0.3), 8e3, 0.0)  # a pressurised band
+    ex, ph = both(bump)
+    assert np.allclose(ph, ex)
+
+
 def test_initial_state_has_no_excess():
     scene = load_scene("collapse_saturated_psi0", [])
     data = initial_particles(scene)
@@ -124,7 +156,8 @@ def test_pressure_quality_is_finite_and_serialisable():
     assert s["excess_p50_Pa"][0] == 0.0
     assert o["excess_min_Pa"] == pytest.approx(-2e3) and o["excess_max_Pa"] == pytest.approx(2e3)
     assert o["excess_max_id"] >= 100 and len(o["excess_max_x_m"]) == 2
-    for v in (o["excess_p1_min_Pa"], o["abs_excess_p99_max_Pa"], o["checkerboard_p_all_max"]):
+    for v in (o["excess_p1_min_Pa"], o["abs_excess_p99_max_Pa"], o["checkerboard_p_all_max"],
+              o["abs_phreatic_excess_p99_max_Pa"], o["suction_p99_max_Pa"]):
         assert math.isfinite(v)
     assert mean_effective_stress(snaps[0]["stress"])[0] == pytest.approx(2e4 * (1.2 - 0.05))
 

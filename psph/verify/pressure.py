@@ -29,6 +29,7 @@ DEBRIS_DX = 5.0  # a particle that moved more than this many dx is "debris"
 PERCENTILES = (1, 5, 50, 95, 99)
 SURFACE_BIN = 0.25  # bin width of the ground-surface search, in dx
 SURFACE_REACH = 3  # bins either side of a particle's own bin (a window about 2 dx wide)
+PHREATIC_ROWS = 2.0  # p above gamma_l PHREATIC_ROWS dx: below the phreatic line
 
 
 def ground_surface(x: np.ndarray, dx: float, comm=None) -> np.ndarray:
@@ -42,6 +43,13 @@ def ground_surface(x: np.ndarray, dx: float, comm=None) -> np.ndarray:
     `x` may be this rank's share of the particles (collective over `comm`: the bins'
     maxima are reduced over the ranks).
     """
+    x = np.asarray(x, dtype=float).reshape(-1, 2)
+    return column_max(x, x[:, 1], dx, comm)
+
+
+def column_max(x: np.ndarray, values: np.ndarray, dx: float, comm=None) -> np.ndarray:
+    """The largest of `values` (one per particle; -inf: none) in each particle's column
+    of `ground_surface` (about 2 dx wide; collective over `comm`)."""
     comm = MPI.COMM_SELF if comm is None else comm
     x = np.asarray(x, dtype=float).reshape(-1, 2)
     b = SURFACE_BIN * dx
@@ -52,7 +60,7 @@ def ground_surface(x: np.ndarray, dx: float, comm=None) -> np.ndarray:
         return np.zeros(0)
     m = SURFACE_REACH
     top = np.full(k_max + 1 + 2 * m, -np.inf)
-    np.maximum.at(top, k + m, x[:, 1])
+    np.maximum.at(top, k + m, np.asarray(values, dtype=float))
     if comm.Get_size() > 1:
         comm.Allreduce(MPI.IN_PLACE, top, op=MPI.MAX)
     windowed = top.copy()
@@ -104,6 +112,38 @@ def excess_pressure(snap: dict, scene, comm=None) -> np.ndarray:
     `psph.io.snapshots.read_snapshots`: x, u, p, stress, id, ...; or this rank's share of
     its rows, collective over `comm`)."""
     return snap["p"] - hydrostatic_pressure(snap["x"], scene, comm=comm)
+
+
+def phreatic_level(x: np.ndarray, p: np.ndarray, scene, comm=None) -> np.ndarray:
+    """Elevation (m) of the current phreatic line above each particle: the highest
+    piezometric head y + p / gamma_l in its column (`column_max`) among the particles
+    whose p exceeds the hydrostatic pressure of PHREATIC_ROWS rows (gamma_l 2 dx, above
+    the particle-scale noise of p), never above `hydrostatic_pressure`'s table; -inf in a
+    column where no particle holds that much (drained to its floor). Where the soil has
+    drained through a free face, the line falls below the ground surface (the paper's
+    Fig. 16 text: "a well-defined curvature phreatic line, above which the pore-water
+    pressure is zero"); elsewhere it is the table."""
+    x = np.asarray(x, dtype=float).reshape(-1, 2)
+    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    dx = scene.particles.dx
+    wet = p > PHREATIC_ROWS * gamma * dx
+    head = np.where(wet, x[:, 1] + p / gamma, -np.inf)
+    level = column_max(x, head, dx, comm)
+    # the table's level, or the particle's own elevation where it is above the table
+    table = x[:, 1] + hydrostatic_pressure(x, scene, comm=comm) / gamma
+    return np.minimum(level, table)
+
+
+def phreatic_excess(snap: dict, scene, comm=None) -> np.ndarray:
+    """Excess pore pressure (Pa) over the hydrostatic pressure of the current phreatic
+    line (`phreatic_level`): p where the column has drained below the particle (the
+    paper's reading: above the phreatic line "negative pore-water pressure (i.e., equal to
+    excess pore-water pressure in this case)"), `excess_pressure` where the line is the
+    table. Collective over `comm` like `excess_pressure`."""
+    x = np.asarray(snap["x"], dtype=float).reshape(-1, 2)
+    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    level = phreatic_level(x, snap["p"], scene, comm)
+    return snap["p"] - gamma * np.maximum(level - x[:, 1], 0.0)
 
 
 def mean_effective_stress(stress: np.ndarray) -> np.ndarray:
@@ -224,6 +264,11 @@ def snapshot_quality(snap: dict, scene, comm=None) -> dict:
     for q, v in zip(PERCENTILES, pct, strict=True):
         out[f"excess_p{q}_Pa"] = float(v)
     out["abs_excess_p99_Pa"] = percentiles(np.abs(ex), [99], comm)[0]
+    # the same over the current phreatic line (drawdown through a drained face not read
+    # as negative excess), and the negative pore pressure itself
+    out["abs_phreatic_excess_p99_Pa"] = percentiles(
+        np.abs(phreatic_excess(snap, scene, comm)), [99], comm)[0]
+    out["suction_p99_Pa"] = percentiles(np.maximum(-snap["p"], 0.0), [99], comm)[0]
     out.update({"excess_min_Pa": ex_min, "excess_min_id": id_min, "excess_min_x_m": x_min,
                 "excess_max_Pa": ex_max, "excess_max_id": id_max, "excess_max_x_m": x_max,
                 "debris_particles": n_debris})
@@ -265,7 +310,9 @@ def pressure_quality_from(rows: list[dict], scene) -> dict:
                 "excess_max_x_m": series["excess_max_x_m"][kmax],
                 "excess_p1_min_Pa": min(series["excess_p1_Pa"]),
                 "excess_p99_max_Pa": max(series["excess_p99_Pa"]),
-                "abs_excess_p99_max_Pa": max(series["abs_excess_p99_Pa"])}
+                "abs_excess_p99_max_Pa": max(series["abs_excess_p99_Pa"]),
+                "abs_phreatic_excess_p99_max_Pa": max(series["abs_phreatic_excess_p99_Pa"]),
+                "suction_p99_max_Pa": max(series["suction_p99_Pa"])}
         for k in ("checkerboard_p_all", "checkerboard_p_debris", "checkerboard_p_eff_all",
                   "checkerboard_p_eff_debris"):
             vals = [v for v in series[k] if v is not None]
@@ -292,11 +339,16 @@ def _where_largest(snap: dict, scene) -> str:
     top = a >= np.percentile(a, 99)
     x, y = snap["x"][:, 0], snap["x"][:, 1]
     base = y - scene.domain.min[1] < 1.5 * scene.particles.dx
+    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    drained = np.abs(snap["p"][top]) < PHREATIC_ROWS * gamma * scene.particles.dx
     return (f"t = {snap['time']:.3g} s, top 1 % of |excess| ({int(top.sum())} particles): "
             f"{int((ex[top] > 0).sum())} positive, {int((ex[top] < 0).sum())} negative; "
             f"x {x[top].min():.2f}..{x[top].max():.2f} m, y {y[top].min():.2f}..{y[top].max():.2f}"
             f" m; {100 * base[top].mean():.0f} % within 1.5 dx of the floor; p99 of |excess| "
-            f"there {_p99_kpa(a[base])}, above {_p99_kpa(a[~base])}")
+            f"there {_p99_kpa(a[base])}, above {_p99_kpa(a[~base])}; "
+            f"{100 * drained.mean():.0f} % with |p| below the hydrostatic of "
+            f"{PHREATIC_ROWS:g} rows (drained, not suction), median p "
+            f"{np.median(snap['p'][top]) / 1e3:.1f} kPa")
 
 
 def _p99_kpa(a: np.ndarray) -> str:
@@ -324,9 +376,11 @@ def main(argv: list[str] | None = None) -> int:
                     "floor")
     args = ap.parse_args(argv)
     print(f"{'run':<32} {'t_end':>6} {'min_ex':>9} {'max_ex':>9} {'p1_ex':>9} {'p99_ex':>9}"
-          f" {'abs_p99':>9} {'cb_p_deb':>8} {'cb_pe_deb':>9}   (excess p in kPa: min, max, "
-          "lowest p1, highest p99 and highest 99th percentile of |excess| over the snapshots; "
-          "checkerboard of p and p' in the debris at the last snapshot)")
+          f" {'abs_p99':>9} {'cb_p_deb':>8} {'cb_pe_deb':>9} {'phr_p99':>9} {'suct_p99':>9}"
+          "   (excess p in kPa: min, max, lowest p1, highest p99 and highest 99th percentile "
+          "of |excess| over the snapshots; checkerboard of p and p' in the debris at the "
+          "last snapshot; highest 99th percentiles of |excess over the phreatic line| and "
+          "of the suction max(-p, 0), kPa)")
     status = 0
     for out in args.out:
         try:
@@ -345,7 +399,9 @@ def main(argv: list[str] | None = None) -> int:
               f"{_fmt(o['excess_p1_min_Pa'], 1e3):>9} {_fmt(o['excess_p99_max_Pa'], 1e3):>9} "
               f"{_fmt(o['abs_excess_p99_max_Pa'], 1e3):>9} "
               f"{_fmt(o['checkerboard_p_debris_last'], 1, '.3f'):>8} "
-              f"{_fmt(o['checkerboard_p_eff_debris_last'], 1, '.3f'):>9}")
+              f"{_fmt(o['checkerboard_p_eff_debris_last'], 1, '.3f'):>9} "
+              f"{_fmt(o['abs_phreatic_excess_p99_max_Pa'], 1e3):>9} "
+              f"{_fmt(o['suction_p99_max_Pa'], 1e3):>9}")
         if args.where:
             print("  " + _where_largest(snaps[-1], scene))
         if args.write and args.at is None:
