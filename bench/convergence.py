@@ -234,6 +234,11 @@ def adopt_run(case: dict, run: Path) -> dict:
         # continued from a checkpoint (bitwise the uninterrupted run, tests/
         # test_parallel_runs.py): the physics is the case's, the wall time only the last leg's
         entry.update(wall_s=None, restarted_from=summary["restarted_from"])
+        if first_snapshot_time(run / "particles.h5") > 0.0:
+            # continued into another directory: its snapshots start at the checkpoint
+            for k in SNAPSHOT_METRICS:
+                entry.pop(k, None)
+            entry["snapshot_metrics"] = "not adopted: the snapshots start after t = 0"
     if written.output != scene.output:
         for k in SNAPSHOT_METRICS:
             entry.pop(k, None)
@@ -279,13 +284,15 @@ def errors(report: list[dict], rich: list[dict], metric: str = "runout_m") -> No
 
 
 def table(report: list[dict], rich: list[dict]) -> None:
-    print(f"{'case':52s} {'exit':>4s} {'wall s':>8s} {'particles':>9s} {'runout m':>9s} "
+    print(f"{'case':58s} {'exit':>4s} {'wall s':>8s} {'particles':>9s} {'runout m':>9s} "
           f"{'error':>7s} {'height m':>8s} {'scarp m':>8s} {'slides':>6s} {'W_p J/m':>9s}")
     def num(e, k, fmt):
-        return format(e[k], fmt) if e.get(k) is not None else "-"
+        if e.get(k) is None:  # the width of fmt, e.g. "8.1f" -> 8
+            return "-".rjust(int(re.match(r"\d*", fmt).group() or 0))
+        return format(e[k], fmt)
 
     for e in report:
-        print(f"{e['label']:52s} {e['exit_code']:4d} {num(e, 'wall_s', '8.1f')} "
+        print(f"{e['label']:58s} {e['exit_code']:4d} {num(e, 'wall_s', '8.1f')} "
               f"{num(e, 'particles', '9d')} {num(e, 'runout_m', '9.4f')} "
               f"{num(e, 'runout_m_error', '7.2%')} {num(e, 'final_height_m', '8.3f')} "
               f"{num(e, 'back_scarp_m', '8.3f')} {num(e, 'slides', '6d')} "
@@ -297,7 +304,7 @@ def table(report: list[dict], rich: list[dict]) -> None:
         ext = f"{s['extrapolated']:.4f}" if s["extrapolated"] is not None else "-"
         vals = " ".join(f"{v:.4f}" for v in s["values"])
         change = f"{s['finest_change']:.2%}" if s["finest_change"] is not None else "-"
-        print(f"  {s['scene']:24s} {s['scheme']:10s} {s['law']:11s} in {s['in']} "
+        print(f"  {s['scene']:24s} {s['scheme']:10s} {s['law']:14s} in {s['in']} "
               f"{s['at']:10s} {vals}  p = {order:5s} f* = {ext:8s} finest change {change}")
 
 
@@ -340,6 +347,14 @@ def plot(report: list[dict], path: Path) -> None:
     print(f"wrote {path}")
 
 
+def first_snapshot_time(path: Path) -> float:
+    """Time of the first snapshot in a run's particles.h5."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return float(f["snapshots"][sorted(f["snapshots"])[0]].attrs["time"])
+
+
 def last_snapshot(path: Path) -> dict:
     """x, eps_p and time of the last snapshot in a run's particles.h5."""
     import h5py
@@ -380,7 +395,8 @@ def plot_slopes(report: list[dict], path: Path) -> None:
         ax.set_ylabel("y (m)")  # vertical scale exaggerated
     axes[-1, 0].set_xlabel("x (m); vertical scale exaggerated")
     fig.colorbar(sc, ax=axes[:, 0], label="equivalent plastic strain", shrink=0.8)
-    fig.suptitle(f"retrogressive_k0_0.5, local and non-local softening (l_c = {SLOPE_L_C} m;"
+    laws = ", ".join(sorted({e["law"] for e in rows}))
+    fig.suptitle(f"retrogressive_k0_0.5: {laws} (l_c = {SLOPE_L_C} m; regularised-m1: m = 1;"
                  f" {date.today()}, {platform.node()})", fontsize=10)
     fig.savefig(path, dpi=110)
     print(f"wrote {path}")

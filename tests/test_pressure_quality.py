@@ -18,6 +18,7 @@ from psph.verify.pressure import (
     mean_effective_stress,
     neighbour_pairs,
     phreatic_excess,
+    phreatic_level,
     pressure_quality,
 )
 
@@ -118,6 +119,18 @@ def test_phreatic_excess_reads_drawdown_as_none_and_suction_as_itself():
     bump = hydro + np.where(right & (x[:, 1] < 0.3), 8e3, 0.0)  # a pressurised band
     ex, ph = both(bump)
     assert np.allclose(ph, ex)
+    # below the threshold (gamma_l 2 dx): drained, the excess is p itself
+    damp = np.where(right, 1.5 * gamma * DX, hydro)
+    ex, ph = both(damp)
+    assert np.allclose(ph[right], damp[right]) and ex[right].min() < -5e3
+    # a numeric table: the line never rises above it, however high the heads above it
+    level = _scene(0.55)
+    hydro_55 = gamma * np.maximum(0.55 - x[:, 1], 0.0)
+    above = x[:, 1] > 0.55
+    snap = {"x": x, "p": np.where(above, 2.0 * gamma * 0.4, 0.0)}
+    assert np.allclose(phreatic_excess(snap, level), snap["p"] - hydro_55)
+    assert np.all(phreatic_level(x, snap["p"], level) <= 0.55)
+    assert np.allclose(phreatic_excess({"x": x, "p": hydro_55}, level), 0.0)
 
 
 def test_initial_state_has_no_excess():
@@ -156,9 +169,15 @@ def test_pressure_quality_is_finite_and_serialisable():
     assert s["excess_p50_Pa"][0] == 0.0
     assert o["excess_min_Pa"] == pytest.approx(-2e3) and o["excess_max_Pa"] == pytest.approx(2e3)
     assert o["excess_max_id"] >= 100 and len(o["excess_max_x_m"]) == 2
-    for v in (o["excess_p1_min_Pa"], o["abs_excess_p99_max_Pa"], o["checkerboard_p_all_max"],
-              o["abs_phreatic_excess_p99_max_Pa"], o["suction_p99_max_Pa"]):
+    for v in (o["excess_p1_min_Pa"], o["abs_excess_p99_max_Pa"], o["checkerboard_p_all_max"]):
         assert math.isfinite(v)
+    for k, snap in enumerate(snaps):  # the new keys are what they say
+        assert s["suction_p99_Pa"][k] == pytest.approx(
+            np.percentile(np.maximum(-snap["p"], 0.0), 99))
+        assert s["abs_phreatic_excess_p99_Pa"][k] == pytest.approx(
+            np.percentile(np.abs(phreatic_excess(snap, scene)), 99))
+    assert o["suction_p99_max_Pa"] == max(s["suction_p99_Pa"]) > 0.0
+    assert o["abs_phreatic_excess_p99_max_Pa"] == max(s["abs_phreatic_excess_p99_Pa"]) > 0.0
     assert mean_effective_stress(snaps[0]["stress"])[0] == pytest.approx(2e4 * (1.2 - 0.05))
 
 
@@ -185,5 +204,12 @@ def test_cli_writes_summary(tmp_path, capsys):
     assert summary["metrics"]["collapse"] == {"runout_m": 1.0}
     assert summary["metrics"]["pressure_quality"]["over_run"]["excess_max_Pa"] == \
         pytest.approx(2e3)
+    # --row: p along one elevation at the last snapshot, from the right end
+    assert main([str(out), "--where", "--row", "0.55", "--every", "1"]) == 0
+    rows = capsys.readouterr().out.splitlines()
+    assert "top 1 %" in rows[2] and "y = 0.55 m" in rows[3]
+    profile = np.array([[float(v) for v in r.split()] for r in rows[4:]])
+    assert len(profile) == 12 and np.all(np.diff(profile[:, 0]) < 0)  # the 12 of the row
+    assert np.allclose(profile[:, 2], 9.81 * 0.6, atol=0.01)  # 1.15 - 0.55 m of water, kPa
     assert main([str(tmp_path / "missing")]) == 2
     assert "error" in capsys.readouterr().err

@@ -6,7 +6,10 @@ snapshots, on rank 0 in post-processing (numpy only).
 - its percentiles and extremes at each snapshot;
 - a checkerboard index of p and of the mean effective stress p' = -(s'xx + s'yy + s'zz)/3:
   the particle-scale, odd-even noise the README reports in the debris (cf. the pressure
-  noise of the unstabilised run, Fig. 22, and the Shepard filter Eq. (46)).
+  noise of the unstabilised run, Fig. 22, and the Shepard filter Eq. (46));
+- the excess over the current phreatic line (`phreatic_excess`: drainage through a free
+  face is not read as negative excess) and the suction max(-p, 0): their 99th
+  percentiles.
 
 `python -m psph.verify.pressure OUT [OUT ...] [--write]` prints one line per run and with
 `--write` stores the block as `metrics.pressure_quality` in each OUT/summary.json.
@@ -96,15 +99,25 @@ def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | N
     by default `ground_surface(x, dx, comm)` (collective; `x` this rank's share).
     """
     x = np.asarray(x, dtype=float).reshape(-1, 2)
-    table = scene.initial.water_table
-    if table is None:
+    if scene.initial.water_table is None:
         return np.zeros(len(x))
     gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    return gamma * np.maximum(table_level(x, scene, surface_y, comm) - x[:, 1], 0.0)
+
+
+def table_level(x: np.ndarray, scene, surface_y: np.ndarray | float | None = None,
+                comm=None) -> np.ndarray:
+    """The water table's elevation y_w (m) above each particle, as `hydrostatic_pressure`
+    defines it (-inf without `initial.water_table`; collective over `comm` like it)."""
+    x = np.asarray(x, dtype=float).reshape(-1, 2)
+    table = scene.initial.water_table
+    if table is None:
+        return np.full(len(x), -np.inf)
     surface = ground_surface(x, scene.particles.dx, comm) if surface_y is None \
         else np.broadcast_to(np.asarray(surface_y, dtype=float), (len(x),))
-    y_w = surface if table == "surface" else np.minimum(table_elevation(table, x[:, 0]),
-                                                        surface)
-    return gamma * np.maximum(y_w - x[:, 1], 0.0)
+    if table == "surface":
+        return np.array(surface, dtype=float)
+    return np.minimum(table_elevation(table, x[:, 0]), surface)
 
 
 def excess_pressure(snap: dict, scene, comm=None) -> np.ndarray:
@@ -128,10 +141,7 @@ def phreatic_level(x: np.ndarray, p: np.ndarray, scene, comm=None) -> np.ndarray
     dx = scene.particles.dx
     wet = p > PHREATIC_ROWS * gamma * dx
     head = np.where(wet, x[:, 1] + p / gamma, -np.inf)
-    level = column_max(x, head, dx, comm)
-    # the table's level, or the particle's own elevation where it is above the table
-    table = x[:, 1] + hydrostatic_pressure(x, scene, comm=comm) / gamma
-    return np.minimum(level, table)
+    return np.minimum(column_max(x, head, dx, comm), table_level(x, scene, comm=comm))
 
 
 def phreatic_excess(snap: dict, scene, comm=None) -> np.ndarray:
@@ -247,7 +257,8 @@ def _num(v: float) -> float | None:
 
 def snapshot_quality(snap: dict, scene, comm=None) -> dict:
     """Pressure quality of one snapshot: percentiles and extremes of the excess pressure
-    (with the particle's id and position), and the checkerboard index of p and p' over all
+    (with the particle's id and position), the 99th percentiles of |excess over the
+    phreatic line| and of the suction, and the checkerboard index of p and p' over all
     particles and over the debris (moved more than 5 dx from x - u, the initial place).
     `snap` may hold this rank's share of the rows (collective over `comm`; the same
     numbers on any number of ranks but for the rounding of the checkerboard's sums)."""
@@ -331,9 +342,11 @@ def _fmt(v, scale: float = 1.0, spec: str = ".1f") -> str:
 
 def _where_largest(snap: dict, scene) -> str:
     """One line: sign, extent and share near the floor of the particles in the top 1 % of
-    |excess p| of a snapshot, and the 99th percentile of |excess| within 1.5 dx of the
+    |excess p| of a snapshot, the 99th percentile of |excess| within 1.5 dx of the
     domain's floor (the bottom row, at 0.5 dx, and particles sunk below the second row's
-    1.5 dx) and above it."""
+    1.5 dx) and above it, and the share of those particles whose |p| is below the
+    hydrostatic pressure of PHREATIC_ROWS rows (drained rather than in suction) with
+    their median p."""
     ex = excess_pressure(snap, scene)
     a = np.abs(ex)
     top = a >= np.percentile(a, 99)
@@ -349,6 +362,22 @@ def _where_largest(snap: dict, scene) -> str:
             f"{100 * drained.mean():.0f} % with |p| below the hydrostatic of "
             f"{PHREATIC_ROWS:g} rows (drained, not suction), median p "
             f"{np.median(snap['p'][top]) / 1e3:.1f} kPa")
+
+
+def _row_profile(snap: dict, scene, y: float, every: int) -> str:
+    """Lines of x, p, the surface table's hydrostatic p and the excess over the phreatic
+    line along the particles within dx/2 of elevation y (every `every`-th from the
+    right end, where a collapse's face is)."""
+    x = snap["x"]
+    row = np.flatnonzero(np.abs(x[:, 1] - y) < 0.5 * scene.particles.dx)
+    row = row[np.argsort(-x[row, 0])][::every]
+    hydro = hydrostatic_pressure(x, scene)
+    phreatic = phreatic_excess(snap, scene)
+    lines = [f"  t = {snap['time']:.3g} s, y = {y:g} m: x (m), p, hydrostatic (surface), "
+             "excess over the phreatic line (kPa)"]
+    lines += [f"    {x[i, 0]:8.3f} {snap['p'][i] / 1e3:8.2f} {hydro[i] / 1e3:8.2f} "
+              f"{phreatic[i] / 1e3:8.2f}" for i in row]
+    return "\n".join(lines)
 
 
 def _p99_kpa(a: np.ndarray) -> str:
@@ -372,8 +401,12 @@ def main(argv: list[str] | None = None) -> int:
                     "different lengths at one time)")
     ap.add_argument("--where", action="store_true",
                     help="also say where the top 1 %% of |excess| sits at the last snapshot "
-                    "used: its sign, extent, and how much of it is within 1.5 dx of the "
-                    "floor")
+                    "used: its sign, extent, how much of it is within 1.5 dx of the "
+                    "floor, and how much of it is drained (|p| near 0) rather than suction")
+    ap.add_argument("--row", type=float, default=None, metavar="Y",
+                    help="also print p along the particles at elevation Y (m) at the last "
+                    "snapshot used, from the right end, against the hydrostatic pressure")
+    ap.add_argument("--every", type=int, default=5, help="with --row: every N-th particle")
     args = ap.parse_args(argv)
     print(f"{'run':<32} {'t_end':>6} {'min_ex':>9} {'max_ex':>9} {'p1_ex':>9} {'p99_ex':>9}"
           f" {'abs_p99':>9} {'cb_p_deb':>8} {'cb_pe_deb':>9} {'phr_p99':>9} {'suct_p99':>9}"
@@ -404,6 +437,8 @@ def main(argv: list[str] | None = None) -> int:
               f"{_fmt(o['suction_p99_max_Pa'], 1e3):>9}")
         if args.where:
             print("  " + _where_largest(snaps[-1], scene))
+        if args.row is not None:
+            print(_row_profile(snaps[-1], scene, args.row, max(args.every, 1)))
         if args.write and args.at is None:
             path = out / "summary.json"
             summary = json.loads(path.read_text()) if path.is_file() else {}
