@@ -9,9 +9,12 @@ with suction ("the soil above the phreatic line subsequently underwent volumetri
 dilation, and thus negative pore-water pressure", the paper on Fig. 16).
 
     .venv/bin/python bench/collapse_suction.py runs/collapse_saturated_psi0 [RUN ...]
+
+Prints a table per run and writes bench/out/collapse_suction.json.
 """
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -45,9 +48,9 @@ def suction_rows(run: Path) -> list[dict]:
         row = {"time_s": float(s["time"]), "particles": int(suck.sum())}
         if suck.any():
             j2 = root_j2(s["stress"][suck])
-            row.update(p_kPa=np.median(s["p"][suck]) / 1e3,
-                       p_eff_kPa=np.median(mean_effective_stress(s["stress"][suck])) / 1e3,
-                       root_j2_kPa=np.median(j2) / 1e3, at_apex=float(np.mean(j2 < apex_j2)),
+            row.update(p_kPa=float(np.median(s["p"][suck])) / 1e3,
+                       p_eff_kPa=float(np.median(mean_effective_stress(s["stress"][suck]))) / 1e3,
+                       root_j2_kPa=float(np.median(j2)) / 1e3, at_apex=float(np.mean(j2 < apex_j2)),
                        n=float(np.median(s["n"][suck])),
                        expanded=float(np.mean(s["n"][suck] > n0 + 0.005)),
                        eps_p=float(np.median(s["eps_p"][suck])),
@@ -60,17 +63,22 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=Path, help="collapse output directories")
     args = ap.parse_args(argv)
+    report = {}
     for run in args.runs:
+        report[run.name] = rows = suction_rows(run)
         print(f"{run.name}: particles with p < -gamma_l {PHREATIC_ROWS:g} dx (medians)")
         print(f"{'t (s)':>6s} {'count':>6s} {'p kPa':>7s} {'p_eff':>7s} {'sqrtJ2':>7s} "
               f"{'apex':>5s} {'n':>7s} {'n>n0':>5s} {'eps_p':>6s} {'y m':>5s}")
-        for r in suction_rows(run):
+        for r in rows:
             if r["particles"] == 0:
                 print(f"{r['time_s']:6.2f} {0:6d}")
                 continue
             print(f"{r['time_s']:6.2f} {r['particles']:6d} {r['p_kPa']:7.2f} "
                   f"{r['p_eff_kPa']:7.2f} {r['root_j2_kPa']:7.2f} {r['at_apex']:5.0%} "
                   f"{r['n']:7.4f} {r['expanded']:5.0%} {r['eps_p']:6.2f} {r['y_m']:5.2f}")
+    out = ROOT / "bench" / "out"
+    out.mkdir(exist_ok=True)
+    (out / "collapse_suction.json").write_text(json.dumps(report, indent=1) + "\n")
     return 0
 
 
