@@ -25,14 +25,8 @@ sys.path.insert(0, str(ROOT))
 
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
+from psph.verify.element import sqrt_j2  # noqa: E402
 from psph.verify.pressure import PHREATIC_ROWS, mean_effective_stress  # noqa: E402
-
-
-def root_j2(stress: np.ndarray) -> np.ndarray:
-    """sqrt(J2) of the effective stress rows xx, yy, zz, xy (Pa)."""
-    mean = stress[:, :3].mean(axis=1, keepdims=True)
-    dev = stress[:, :3] - mean
-    return np.sqrt(0.5 * np.sum(dev * dev, axis=1) + stress[:, 3] ** 2)
 
 
 def suction_rows(run: Path) -> list[dict]:
@@ -47,7 +41,7 @@ def suction_rows(run: Path) -> list[dict]:
         suck = s["p"] < threshold
         row = {"time_s": float(s["time"]), "particles": int(suck.sum())}
         if suck.any():
-            j2 = root_j2(s["stress"][suck])
+            j2 = sqrt_j2(s["stress"][suck])
             row.update(p_kPa=float(np.median(s["p"][suck])) / 1e3,
                        p_eff_kPa=float(np.median(mean_effective_stress(s["stress"][suck]))) / 1e3,
                        root_j2_kPa=float(np.median(j2)) / 1e3, at_apex=float(np.mean(j2 < apex_j2)),

@@ -28,6 +28,7 @@ OUT = Path(__file__).parent / "out"
 
 HEIGHT, LENGTH = 4.8, 9.6
 
+
 def case(dx: float, length: float, m: float, steps: int = 1000, every: int = 100) -> dict:
     """One block: `length` = l_c (0: local law) at spacing dx (`sliding_block`'s rows)."""
     from psph.verify.sliding import SLOPE_SOFTENING, sliding_block
@@ -39,6 +40,7 @@ def case(dx: float, length: float, m: float, steps: int = 1000, every: int = 100
     res = sliding_block(over, 10.0, steps, every, round(LENGTH / dx), round(HEIGHT / dx), dx)
     return {"dx": dx, "l_c": length, "m": m, "l_c_over_dx": length / dx,
             "rows": res["rows"]}
+
 
 def plot(cases: list[dict], path: Path) -> None:
     """Basal traction and the bottom row's eps_hat against time, one line per case."""
@@ -64,6 +66,7 @@ def plot(cases: list[dict], path: Path) -> None:
     ax[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -91,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     plot(out, OUT / f"nonlocal_sliding{tag}.png")
     print(f"wrote bench/out/nonlocal_sliding{tag}.json and .png")
     return 0
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -4,8 +4,8 @@
     .venv/bin/python bench/slope_series.py OUT1 OUT2 ... [--every 5] [--png PATH]
 
 Prints the table (the snapshot times every `--every` seconds that all runs reached, and
-each run's slide times) and draws run-out and back scarp against time (default
-bench/out/slope_series.png).
+each run's slide times), draws run-out and back scarp against time (default
+bench/out/slope_series.png) and writes the table beside the PNG (.json).
 """
 
 import argparse
@@ -33,14 +33,17 @@ def main(argv: list[str] | None = None) -> int:
     print("t (s)  " + "  ".join(f"{r['name'][-28:]:>28}" for r in runs))
     print("       " + "  ".join(f"{'run-out':>13} {'scarp':>14}" for _ in runs))
     t = args.every
+    table = []
     while t <= end + 1e-6:
-        cells = []
+        cells, row = [], {"time_s": t}
         for r in runs:
             times = r["series"]["time_s"]
             k = min(range(len(times)), key=lambda i: abs(times[i] - t))
-            cells.append(f"{r['series']['runout_m'][k]:11.1f} m "
-                         f"{r['series']['back_scarp_m'][k]:12.1f} m")
+            runout, scarp = r["series"]["runout_m"][k], r["series"]["back_scarp_m"][k]
+            cells.append(f"{runout:11.1f} m {scarp:12.1f} m")
+            row[r["name"]] = {"runout_m": runout, "back_scarp_m": scarp}
         print(f"{t:5.1f}  " + "  ".join(cells))
+        table.append(row)
         t += args.every
     for r in runs:
         print(f"{r['name']}: {r['particles']} particles, to {r['end']:.1f} s, slides at "
@@ -60,7 +63,10 @@ def main(argv: list[str] | None = None) -> int:
     fig.tight_layout()
     args.png.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.png, dpi=110)
-    print(f"wrote {args.png}")
+    data = args.png.with_suffix(".json")
+    data.write_text(json.dumps({"table": table, "slides": {r["name"]: r["slides"]
+                                                           for r in runs}}, indent=1) + "\n")
+    print(f"wrote {args.png} and {data}")
     return 0
 
 

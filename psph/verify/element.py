@@ -113,10 +113,14 @@ def mean_total(stress: np.ndarray, p: float) -> float:
     return float(stress[0] + stress[1] + stress[2]) / 3.0 - float(p)
 
 
-def sqrt_j2(stress: np.ndarray) -> float:
-    m = (stress[0] + stress[1] + stress[2]) / 3.0
-    d = np.array([stress[0] - m, stress[1] - m, stress[2] - m])
-    return math.sqrt(0.5 * float(d @ d) + float(stress[3]) ** 2)
+def sqrt_j2(stress: np.ndarray) -> float | np.ndarray:
+    """sqrt(J2) of the effective stress xx, yy, zz, xy (Pa): a float for one row, an
+    array for rows (N, 4+)."""
+    s = np.asarray(stress, dtype=float)
+    m = (s[..., 0] + s[..., 1] + s[..., 2]) / 3.0
+    j2 = 0.5 * ((s[..., 0] - m) ** 2 + (s[..., 1] - m) ** 2 + (s[..., 2] - m) ** 2) \
+        + s[..., 3] ** 2
+    return math.sqrt(float(j2)) if s.ndim == 1 else np.sqrt(j2)
 
 
 def jaumann_elastic(stress: np.ndarray, grad: np.ndarray, lam: float, shear: float,
