@@ -21,7 +21,7 @@ from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
 from psph.scene_boundaries import points_of  # noqa: E402
 from psph.verify import terzaghi  # noqa: E402
-from psph.verify.pressure import excess_pressure  # noqa: E402
+from psph.verify.pressure import excess_pressure, phreatic_excess  # noqa: E402
 
 
 def plot_run(out: Path, field: str = "p") -> list[Path]:
@@ -44,10 +44,28 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
     return paths
 
 
+def excess_of(snap: dict, scene) -> np.ndarray:
+    """The excess pore pressure (Pa) the frames draw: over the current phreatic line
+    (`phreatic_excess`) where the free surface is drained (`pressure.ponding =
+    "drained"`, the collapses: water leaves through the face and the table falls with
+    it; the paper on Fig. 16: above the phreatic line the negative pore pressure is
+    "equal to excess pore-water pressure"), else over the surface's table
+    (`excess_pressure`)."""
+    if scene.pressure.ponding == "drained":
+        return phreatic_excess(snap, scene)
+    return excess_pressure(snap, scene)
+
+
+def excess_label(scene) -> str:
+    """The frames' name of `excess_of`."""
+    return "excess p over the phreatic line" if scene.pressure.ponding == "drained" \
+        else "excess p"
+
+
 def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     """Frames at up to 4 snapshot times: equivalent plastic strain, and for a coupled run
     the excess pore pressure (p minus the hydrostatic p of the water table at the
-    particle's current position, `psph.verify.pressure.excess_pressure`) and the mean
+    particle's current position, `excess_of`) and the mean
     effective stress (Figs. 14-17, 19-21, 24-25)."""
     if scene.output.times:  # the paper's frame times (Figs. 19-21), then the end
         picks = [min(range(len(snaps)), key=lambda i: abs(snaps[i]["time"] - t))
@@ -83,13 +101,15 @@ def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
         if coupled:
             mean = -(f["stress"][:, 0] + f["stress"][:, 1] + f["stress"][:, 2]) / 3e3
             # excess over the hydrostatic p of the water table at the current position,
-            # as Figs. 14-17, 20 and 24 show (psph/verify/pressure.py)
-            ex = excess_pressure(f, scene) / 1e3
+            # as Figs. 14-17, 20 and 24 show (psph/verify/pressure.py); behind a drained
+            # free surface the table is the current phreatic line (the paper on Fig. 16)
+            ex = excess_of(f, scene) / 1e3
             # colour limits from the 99.5th percentile: a few extreme particles would
             # wash out the rest (the title gives the extremes); symmetric about 0
             lim = max(np.percentile(np.abs(ex), 99.5), 1e-6)
             top = max(np.percentile(mean, 99.5), 1e-6)
-            fields += [("excess p", ex, f"excess p (kPa; {ex.min():.0f} to {ex.max():.0f})",
+            fields += [("excess p", ex, f"{excess_label(scene)} (kPa; {ex.min():.0f} to "
+                                        f"{ex.max():.0f})",
                         (-lim, lim), "RdBu_r"),
                        ("mean", mean, f"p' (kPa; max {mean.max():.0f})", (0, top), "magma")]
         for c, (_, val, label, (vmin, vmax), cmap) in enumerate(fields):

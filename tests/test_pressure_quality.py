@@ -20,6 +20,7 @@ from psph.verify.pressure import (
     phreatic_excess,
     phreatic_level,
     pressure_quality,
+    suction_integral,
 )
 
 DX = 0.1
@@ -131,6 +132,35 @@ def test_phreatic_excess_reads_drawdown_as_none_and_suction_as_itself():
     assert np.allclose(phreatic_excess(snap, level), snap["p"] - hydro_55)
     assert np.all(phreatic_level(x, snap["p"], level) <= 0.55)
     assert np.allclose(phreatic_excess({"x": x, "p": hydro_55}, level), 0.0)
+
+
+def test_frames_draw_the_excess_over_the_phreatic_line_behind_a_drained_surface():
+    """`psph plot`'s excess: behind a drained free surface (the collapses) the table is
+    the current phreatic line, so a face drained to p = 0 shows none; with ponding (the
+    slopes) the table is the ground surface, and the same drawdown shows as negative."""
+    from psph.plot import excess_label, excess_of
+
+    x, _, _ = _lattice(10)
+    gamma = 1000.0 * 9.81
+    right = x[:, 0] > 0.5
+    snap = {"x": x, "p": np.where(right, 0.0, gamma * (0.95 - x[:, 1]))}
+    for ponding, drawn in (("drained", 0.0), (True, None)):
+        scene = _scene("surface")
+        scene.pressure.ponding = ponding
+        ex = excess_of(snap, scene)
+        if drawn is None:
+            assert np.allclose(ex, excess_pressure(snap, scene)) and ex[right].min() < -5e3
+            assert excess_label(scene) == "excess p"
+        else:
+            assert np.allclose(ex, drawn)
+            assert "phreatic" in excess_label(scene)
+
+
+def test_suction_integral_sums_only_the_negative_pressure_over_the_areas():
+    p = np.array([-2.0e3, 5.0e3, -1.0e3, 0.0])
+    vol = np.array([0.01, 0.04, 0.02, 0.03])
+    assert suction_integral({"p": p, "vol": vol}) == pytest.approx(2.0e3 * 0.01 + 1.0e3 * 0.02)
+    assert suction_integral({"p": np.abs(p), "vol": vol}) == 0.0
 
 
 def test_initial_state_has_no_excess():

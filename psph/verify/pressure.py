@@ -156,6 +156,16 @@ def phreatic_excess(snap: dict, scene, comm=None) -> np.ndarray:
     return snap["p"] - gamma * np.maximum(level - x[:, 1], 0.0)
 
 
+def suction_integral(snap: dict, comm=None) -> float:
+    """The suction of a snapshot summed over the soil: sum_i V_i max(-p_i, 0) (N per metre
+    of a 2D section), with V_i the particle's current area (`vol`). Where a single
+    particle's most negative p tells how deep the suction goes, this tells how much of
+    the soil holds it and how strongly (the "pore fluid pressure field" of the paper's
+    Fig. 16). Collective over `comm` like `excess_pressure`."""
+    comm = MPI.COMM_SELF if comm is None else comm
+    return comm.allreduce(float(np.sum(snap["vol"] * np.maximum(-snap["p"], 0.0))))
+
+
 def mean_effective_stress(stress: np.ndarray) -> np.ndarray:
     """p' = -(s'xx + s'yy + s'zz) / 3 (Pa, compression positive) from the effective stress
     columns xx, yy, zz, xy, ... (tension positive, Eq. (2))."""
