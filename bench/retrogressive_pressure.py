@@ -18,7 +18,11 @@ For each run directory:
   between slides with freshly sheared soil, whose excess is new, not undissipated):
   Fig. 20 shows it dissipating; with the same particles' median mean effective stress
   p' (compression positive) at the slide and later, whose rise is the consolidation of
-  Fig. 21 (negative: effective tension, README cause 13);
+  Fig. 21 (negative: effective tension, README cause 13); and their median buoyant
+  overburden gamma' (y_s - y) (y_s: the ground surface above, gamma' = (1 - n0)
+  (rho_s - rho_l) |g|) with the median ratio r_u = excess / buoyant overburden: a
+  liquefied soil loaded without drainage keeps r_u = 1 while its excess grows with the
+  overburden, so a fall of r_u is dissipation net of the loading by later debris;
 - the maximum of p in history.csv (a row per 1 ms, 2-3 steps) against the same bar: rows
   above it, the largest, and the steps between the sharp falls of the maximum (by more
   than 20 %) while it is above the bar, beside the scene's Shepard interval
@@ -46,16 +50,31 @@ from psph.verify.collapse import slide_history  # noqa: E402
 from psph.verify.pressure import (  # noqa: E402
     DEBRIS_DX,
     excess_pressure,
+    ground_surface,
     mean_effective_stress,
 )
 
 BAND_EPS = 0.05  # equivalent plastic strain of the shear zone
 BASE_ZONE_M = 4.0  # the basal shear zone starts in the bottom 4 m
+RU_MIN_DEPTH_DX = 2.0  # r_u only below 2 dx of soil (near the surface it is 0 / 0)
 
 
 def _median_p95(ex: np.ndarray) -> dict:
     return {"median_Pa": float(np.median(ex)) if len(ex) else None,
             "p95_Pa": float(np.percentile(ex, 95)) if len(ex) else None}
+
+
+def _overburden(x: np.ndarray, ex: np.ndarray, sel: np.ndarray, gamma_b: float,
+                dx: float) -> dict:
+    """Median buoyant overburden gamma_b (y_s - y) of the selected particles (y_s:
+    `ground_surface`), and the median r_u = excess / that overburden over those below
+    RU_MIN_DEPTH_DX of soil."""
+    depth = ground_surface(x, dx)[sel] - x[sel, 1]
+    deep = depth > RU_MIN_DEPTH_DX * dx
+    return {"buoyant_overburden_median_Pa": float(np.median(gamma_b * depth))
+            if sel.any() else None,
+            "ru_median": float(np.median(ex[sel][deep] / (gamma_b * depth[deep])))
+            if deep.any() else None}
 
 
 def history_maximum(out: Path, bar: float) -> dict:
@@ -148,6 +167,7 @@ def run_checks(out: Path) -> dict:
     result["p_max_at"] = {"time_s": float(hi[1]["time"]),
                           "x_m": hi[1]["x"][int(np.argmax(hi[1]["p"]))].tolist()}
     result["p_above_sigma_v_base"] = int(sum((s["p"] > sigma_v_base).sum() for s in snaps))
+    gamma_b = (1 - m.porosity) * (m.rho_s - m.rho_l) * abs(scene.gravity[1])
     # debris excess after each slide
     marks = list(slides["slide_times_s"]) + [float(times[-1]) + 1.0]
     decay = []
@@ -168,7 +188,8 @@ def run_checks(out: Path) -> dict:
             stats[-1]["same_particles"] = {
                 **_median_p95(ex[same]),
                 "mean_effective_median_Pa": float(np.median(
-                    mean_effective_stress(s["stress"][same]))) if same.any() else None}
+                    mean_effective_stress(s["stress"][same]))) if same.any() else None,
+                **_overburden(s["x"], ex, same, gamma_b, dx)}
         decay.append({"slide": k + 1, "at": stats[0], "later": stats[1]})
     result["debris_after_slides"] = decay
     return result
@@ -210,21 +231,30 @@ def main(argv: list[str]) -> int:
                   f"bottom row's own lead: median {np.median(row) / 1e3:.0f} kPa)")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
-              f"   {'pe_at':>8s} {'pe_later':>8s}"
+              f"   {'pe_at':>8s} {'pe_later':>8s}   {'ob_at':>6s} {'ob_later':>8s}"
+              f" {'ru_at':>5s} {'ru_later':>8s}"
               "  (excess p of the debris, kPa; 'same': the particles of the debris at the "
-              "slide, later; pe: their median p' at the slide and later, kPa)")
+              "slide, later; pe: their median p' at the slide and later, kPa; ob: their "
+              "median buoyant overburden, kPa; ru: their median excess / it)")
         for d in r["debris_after_slides"]:
             a, b = d["at"], d["later"]
 
             def f(v):
                 return "-" if v is None else f"{v / 1e3:8.1f}"
+
+            def r(v):
+                return "-" if v is None else f"{v:5.2f}"
             print(f"  {d['slide']:5d} {a['time_s']:6.1f} {a['particles']:6d} "
                   f"{f(a['median_Pa']):>8s} {f(a['p95_Pa']):>8s}   {b['time_s']:7.1f} "
                   f"{f(b['median_Pa']):>8s} {f(b['p95_Pa']):>8s}   "
                   f"{f(b['same_particles']['median_Pa']):>8s} "
                   f"{f(b['same_particles']['p95_Pa']):>8s}   "
                   f"{f(a['same_particles']['mean_effective_median_Pa']):>8s} "
-                  f"{f(b['same_particles']['mean_effective_median_Pa']):>8s}")
+                  f"{f(b['same_particles']['mean_effective_median_Pa']):>8s}   "
+                  f"{f(a['same_particles']['buoyant_overburden_median_Pa']):>6s} "
+                  f"{f(b['same_particles']['buoyant_overburden_median_Pa']):>8s} "
+                  f"{r(a['same_particles']['ru_median']):>5s} "
+                  f"{r(b['same_particles']['ru_median']):>8s}")
     out = ROOT / "bench" / "out"
     out.mkdir(exist_ok=True)
     (out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")
