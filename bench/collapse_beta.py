@@ -36,7 +36,8 @@ from psph.verify.pressure import PHREATIC_ROWS, suction_integral  # noqa: E402
 
 OUT = Path(__file__).parent / "out"
 CASES = {"Eq. (47) on, beta = 0.04": 0.04, "Eq. (47) off, beta = 0": 0.0}
-END, TIMES = 1.2, [0.3, 0.6, 1.2]  # Fig. 15's frames
+# Fig. 15's frames, after one at the peak of the suction without Eq. (47)
+END, TIMES = 1.2, [0.15, 0.3, 0.6, 1.2]
 EVERY = 0.05  # s between the snapshots of the suction integral
 
 
@@ -124,7 +125,7 @@ def plot(report: dict) -> None:
     import matplotlib.pyplot as plt
 
     cases = report["cases"]
-    fig = plt.figure(figsize=(13, 8))
+    fig = plt.figure(figsize=(13, 9.5))
     grid = fig.add_gridspec(len(TIMES) + 1, 2, height_ratios=[1] * len(TIMES) + [1.2])
     scene = load_scene("collapse_saturated_psi2.5")
     frames = {label: read_snapshots(Path(case["dir"]) / "particles.h5")
@@ -150,7 +151,7 @@ def plot(report: dict) -> None:
             ax.set_aspect("equal")
             ax.set_title(f"{label}: t = {s['time']:.3g} s ({ex.min():.0f} to "
                          f"{ex.max():.0f} kPa)", fontsize=9)
-            fig.colorbar(sc, ax=ax, label=f"{excess_label(scene)} (kPa)", shrink=0.8)
+            fig.colorbar(sc, ax=ax, label="kPa", shrink=0.8)
     ax = fig.add_subplot(grid[-1, 0])
     for label, case in cases.items():
         ax.plot(case["t"], np.array(case["p_min"]) / 1e3, label=label)
@@ -166,8 +167,8 @@ def plot(report: dict) -> None:
     ax.set_xlabel("t (s)")
     ax.set_ylabel("suction of the column,\nintegral of max(-p, 0) dA (kN/m)")
     ax.legend(fontsize=8)
-    fig.suptitle(f"collapse_saturated_psi2.5 with and without Eq. (47), {report['date']}",
-                 fontsize=10)
+    fig.suptitle(f"collapse_saturated_psi2.5 with and without Eq. (47): "
+                 f"{excess_label(scene)}, {report['date']}", fontsize=10)
     fig.tight_layout()
     fig.savefig(OUT / "collapse_beta.png", dpi=100)
     print(f"wrote {OUT / 'collapse_beta.png'}")
