@@ -21,8 +21,9 @@ For each run directory:
   Fig. 21 (negative: effective tension, README cause 13); and their median buoyant
   overburden gamma' (y_s - y) (y_s: the ground surface above, gamma' = (1 - n0)
   (rho_s - rho_l) |g|) with the median ratio r_u = excess / buoyant overburden: a
-  liquefied soil loaded without drainage keeps r_u = 1 while its excess grows with the
-  overburden, so a fall of r_u is dissipation net of the loading by later debris;
+  liquefied soil at rest loaded without drainage keeps r_u = 1 while its excess grows
+  with the overburden, so the pair tells a change of load from a change of r_u (a
+  proxy: gamma' from the initial n, y_s the highest particle within about 2 dx);
 - the maximum of p in history.csv (a row per 1 ms, 2-3 steps) against the same bar: rows
   above it, the largest, and the steps between the sharp falls of the maximum (by more
   than 20 %) while it is above the bar, beside the scene's Shepard interval
@@ -231,7 +232,7 @@ def main(argv: list[str]) -> int:
                   f"bottom row's own lead: median {np.median(row) / 1e3:.0f} kPa)")
         print(f"  {'slide':>5s} {'t (s)':>6s} {'debris':>6s} {'median':>8s} {'p95':>8s}   "
               f"{'later t':>7s} {'median':>8s} {'p95':>8s}   {'same':>8s} {'same':>8s}"
-              f"   {'pe_at':>8s} {'pe_later':>8s}   {'ob_at':>6s} {'ob_later':>8s}"
+              f"   {'pe_at':>8s} {'pe_later':>8s}   {'ob_at':>8s} {'ob_later':>8s}"
               f" {'ru_at':>5s} {'ru_later':>8s}"
               "  (excess p of the debris, kPa; 'same': the particles of the debris at the "
               "slide, later; pe: their median p' at the slide and later, kPa; ob: their "
@@ -242,7 +243,7 @@ def main(argv: list[str]) -> int:
             def f(v):
                 return "-" if v is None else f"{v / 1e3:8.1f}"
 
-            def r(v):
+            def fmt_ru(v):
                 return "-" if v is None else f"{v:5.2f}"
             print(f"  {d['slide']:5d} {a['time_s']:6.1f} {a['particles']:6d} "
                   f"{f(a['median_Pa']):>8s} {f(a['p95_Pa']):>8s}   {b['time_s']:7.1f} "
@@ -251,10 +252,10 @@ def main(argv: list[str]) -> int:
                   f"{f(b['same_particles']['p95_Pa']):>8s}   "
                   f"{f(a['same_particles']['mean_effective_median_Pa']):>8s} "
                   f"{f(b['same_particles']['mean_effective_median_Pa']):>8s}   "
-                  f"{f(a['same_particles']['buoyant_overburden_median_Pa']):>6s} "
+                  f"{f(a['same_particles']['buoyant_overburden_median_Pa']):>8s} "
                   f"{f(b['same_particles']['buoyant_overburden_median_Pa']):>8s} "
-                  f"{r(a['same_particles']['ru_median']):>5s} "
-                  f"{r(b['same_particles']['ru_median']):>8s}")
+                  f"{fmt_ru(a['same_particles']['ru_median']):>5s} "
+                  f"{fmt_ru(b['same_particles']['ru_median']):>8s}")
     out = ROOT / "bench" / "out"
     out.mkdir(exist_ok=True)
     (out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")

@@ -64,8 +64,9 @@ def excess_label(scene) -> str:
 
 def _collapse_picture(out: Path, scene, snaps: list[dict]) -> Path:
     """Frames at up to 4 snapshot times: equivalent plastic strain, and for a coupled run
-    the excess pore pressure (p minus the hydrostatic p of the water table at the
-    particle's current position, `excess_of`) and the mean
+    the excess pore pressure (p minus the hydrostatic p of the water table, or behind a
+    drained surface of the phreatic line, at the particle's current position,
+    `excess_of`) and the mean
     effective stress (Figs. 14-17, 19-21, 24-25)."""
     if scene.output.times:  # the paper's frame times (Figs. 19-21), then the end
         picks = [min(range(len(snaps)), key=lambda i: abs(snaps[i]["time"] - t))
