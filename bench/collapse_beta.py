@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT))
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.plot import excess_label, excess_of  # noqa: E402
 from psph.scene import load_scene  # noqa: E402
-from psph.verify.pressure import PHREATIC_ROWS, suction_integral  # noqa: E402
+from psph.verify.pressure import PHREATIC_ROWS, suction_integral, wet_threshold  # noqa: E402
 
 OUT = Path(__file__).parent / "out"
 CASES = {"Eq. (47) on, beta = 0.04": 0.04, "Eq. (47) off, beta = 0": 0.0}
@@ -56,8 +56,7 @@ def suction_series(out: Path) -> dict:
     """At each snapshot of the run in `out`: the suction integral (kN/m,
     `suction_integral`), the particles with p below -gamma_l 2 dx and the most negative p."""
     scene = load_scene("collapse_saturated_psi2.5")
-    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
-    threshold = -PHREATIC_ROWS * gamma * scene.particles.dx
+    threshold = -wet_threshold(scene)
     snaps = read_snapshots(out / "particles.h5") if (out / "particles.h5").is_file() else []
     return {"t": [float(s["time"]) for s in snaps],
             "suction_kN_per_m": [suction_integral(s) / 1e3 for s in snaps],

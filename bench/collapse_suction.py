@@ -26,14 +26,13 @@ sys.path.insert(0, str(ROOT))
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.scene import run_scene  # noqa: E402
 from psph.verify.element import sqrt_j2  # noqa: E402
-from psph.verify.pressure import PHREATIC_ROWS, mean_effective_stress  # noqa: E402
+from psph.verify.pressure import PHREATIC_ROWS, mean_effective_stress, wet_threshold  # noqa: E402
 
 
 def suction_rows(run: Path) -> list[dict]:
     """One row per snapshot after t = 0 (see the module docstring)."""
     scene = run_scene(run)
-    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
-    threshold = -PHREATIC_ROWS * gamma * scene.particles.dx
+    threshold = -wet_threshold(scene)
     apex_j2 = 0.01 * scene.material.plasticity.c
     n0 = scene.material.porosity
     rows = []

@@ -127,6 +127,14 @@ def excess_pressure(snap: dict, scene, comm=None) -> np.ndarray:
     return snap["p"] - hydrostatic_pressure(snap["x"], scene, comm=comm)
 
 
+def wet_threshold(scene) -> float:
+    """The pore pressure (Pa) of PHREATIC_ROWS rows of water, gamma_l 2 dx: above it a
+    particle is below the phreatic line; |p| below it is drained, -p above it suction
+    (the particle-scale noise of p is smaller)."""
+    return PHREATIC_ROWS * scene.material.rho_l * float(np.hypot(*scene.gravity)) \
+        * scene.particles.dx
+
+
 def phreatic_level(x: np.ndarray, p: np.ndarray, scene, comm=None) -> np.ndarray:
     """Elevation (m) of the current phreatic line above each particle: the highest
     piezometric head y + p / gamma_l in its column (`column_max`) among the particles
@@ -139,7 +147,7 @@ def phreatic_level(x: np.ndarray, p: np.ndarray, scene, comm=None) -> np.ndarray
     x = np.asarray(x, dtype=float).reshape(-1, 2)
     gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
     dx = scene.particles.dx
-    wet = p > PHREATIC_ROWS * gamma * dx
+    wet = p > wet_threshold(scene)
     head = np.where(wet, x[:, 1] + p / gamma, -np.inf)
     return np.minimum(column_max(x, head, dx, comm), table_level(x, scene, comm=comm))
 
@@ -362,8 +370,7 @@ def _where_largest(snap: dict, scene) -> str:
     top = a >= np.percentile(a, 99)
     x, y = snap["x"][:, 0], snap["x"][:, 1]
     base = y - scene.domain.min[1] < 1.5 * scene.particles.dx
-    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
-    drained = np.abs(snap["p"][top]) < PHREATIC_ROWS * gamma * scene.particles.dx
+    drained = np.abs(snap["p"][top]) < wet_threshold(scene)
     return (f"t = {snap['time']:.3g} s, top 1 % of |excess| ({int(top.sum())} particles): "
             f"{int((ex[top] > 0).sum())} positive, {int((ex[top] < 0).sum())} negative; "
             f"x {x[top].min():.2f}..{x[top].max():.2f} m, y {y[top].min():.2f}..{y[top].max():.2f}"
