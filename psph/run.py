@@ -327,6 +327,14 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         except OSError:
             pass
         raise
+    except NumericalError:
+        writer.close()
+        if rank0:  # the diagnostics up to the failure: how it grew (issue 39)
+            try:
+                _write_history(out / "history.csv", history)
+            except OSError as e:
+                write_failed(out / "history.csv", e)
+        raise
     except BaseException:
         writer.close()
         raise

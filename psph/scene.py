@@ -145,8 +145,10 @@ class Time(_Model):
     cfl_fluid: Pos = 0.1  # C_CFL^l of Eq. (42)
     allow_dt_above_solid_limit: bool = False
     # "euler": one pair sweep, rates from v^n; "symplectic": kick v first, then a second
-    # (velocity-only) sweep gives the stress/pressure rates from v^(n+1), Eq. (27)
-    integrator: Literal["euler", "symplectic"] = "euler"
+    # (velocity-only) sweep gives the stress/pressure rates from v^(n+1), Eq. (27).
+    # Default: "symplectic" with pressure.scheme "projection" (the one-sweep step has no
+    # stable step with it, issue 39), "euler" otherwise
+    integrator: Literal["euler", "symplectic"] | None = None
 
 
 class Stabilisation(_Model):
@@ -338,6 +340,8 @@ class Scene(_Model):
             raise _Rule("pressure.momentum", self.pressure.momentum,
                         "needs pressure.scheme 'explicit' or 'tpi' (the projection's velocity "
                         "correction is pair-symmetric)")
+        if self.verification.reference == "terzaghi":
+            self._check_terzaghi_reference()
         if self.time.end is None:
             if self.verification.reference == "none" or not self.verification.tv:
                 raise _Rule("time.end", None, "required (no verification.tv to derive it from)")
@@ -354,7 +358,29 @@ class Scene(_Model):
                             "modulus; set time.allow_dt_above_solid_limit = true to force)")
         if self.pressure.scheme == "tpi" and not self.pressure.allow_unstable:
             self._check_tpi_stability()
+        if self.time.integrator is None:
+            self.time.integrator = "symplectic" if self.pressure.scheme == "projection" \
+                else "euler"
+        if self.pressure.scheme == "projection" and self.time.integrator == "euler" \
+                and not self.pressure.allow_unstable:
+            raise _Rule("time.integrator", "euler",
+                        "has no stable step with pressure.scheme 'projection' (the one-sweep "
+                        "step is forward Euler for the skeleton: it grew at 0.25 to 2 x Eq. "
+                        "(41), bench/projection_stability.py); use 'symplectic', stable to "
+                        f"Eq. (41) {solid_dt_limit(self):.3e} s (pressure.allow_unstable = "
+                        "true to force)")
         return self
+
+    def _check_terzaghi_reference(self) -> None:
+        """What `verify.terzaghi.from_scene` reads: a load on the top, one drainage time."""
+        key = "verification.reference"
+        if not self.loads or self.loads[0].side != "top":
+            raise _Rule(key, "terzaghi", "needs a [[loads]] entry on the top side first")
+        ends = {getattr(self.boundaries, s).drained_from for s in ("top", "bottom")
+                if getattr(self.boundaries, s).flow == "drained"}
+        if len(ends) > 1:
+            raise _Rule(key, "terzaghi", "needs the top and the bottom drained from the same "
+                        f"time (boundaries.top/bottom.drained_from: {sorted(ends)})")
 
     def _check_undrained_load(self) -> None:
         """`initial.undrained_load` is the oedometric state of one step load over a side."""

@@ -20,6 +20,9 @@ def run_cli(*args, cwd=None):
 CASES = [
     # (override or text edit, words the message must contain)
     (["--set", "material.colour=1"], ["unknown key", "material.colour"]),
+    (["--set", "loads=[]"], ["verification.reference", "terzaghi", "on the top side"]),
+    (["--set", "boundaries.bottom={motion='fixed', flow='drained', drained_from=0.02}"],
+     ["verification.reference", "the same time", "0.01, 0.02"]),
     (["--set", "material.E='stiff'"], ["material.E", "'stiff'", "number"]),
     (["--set", "material.E=-2e7"], ["material.E", "-2", "greater than 0"]),
     (["--set", "material.K_l=0"], ["material.K_l", "0", "greater than 0"]),

@@ -229,7 +229,8 @@ def test_pressure_projection_one_vs_two_ranks_bitwise(tmp_path_factory, integrat
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    scene = load_scene("terzaghi", COLUMN + PROJECTION + [f"time.integrator='{integrator}'"])
+    scene = load_scene("terzaghi", COLUMN + PROJECTION + [f"time.integrator='{integrator}'",
+                                                          "pressure.allow_unstable=true"])
     _one_vs_two(comm, scene, out)
     if comm.Get_rank() == 0:
         one = json.loads((out / "one" / "summary.json").read_text())["pressure_solve"]

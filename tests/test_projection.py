@@ -25,6 +25,9 @@ COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.
           "output.history_interval=2e-4"]
 PROJECTION = ["pressure.scheme='projection'", "time.integrator='symplectic'",
               "pressure.explicit_until=0.0"]
+# the one-sweep step with the projection is refused by validation (issue 39); these tests
+# keep its code path working
+FORCE_EULER = "pressure.allow_unstable=true"
 
 
 @pytest.mark.parametrize("integrator", ["symplectic", "euler"])
@@ -36,7 +39,8 @@ def test_projection_runs_at_the_solid_limit_with_its_stage(integrator):
 
     from psph.run import make_slabs
 
-    scene = load_scene("terzaghi", COARSE + PROJECTION + [f"time.integrator='{integrator}'"])
+    scene = load_scene("terzaghi", COARSE + PROJECTION + [f"time.integrator='{integrator}'",
+                                                          FORCE_EULER])
     scene.time.dt = None  # the scene's own dt off: the default step
     st = time_stepping(scene)
     assert st.dt_main == st.limits["dt_solid_eq41"]
@@ -52,12 +56,9 @@ def test_projection_runs_at_the_solid_limit_with_its_stage(integrator):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("integrator", ["symplectic", "euler"])
-def test_terzaghi_with_the_projection_at_the_solid_limit(tmp_path, integrator):
-    """The same bars for the one-sweep step (measured 2026-11-30: 0.0051 / 0.0011 /
-    0.0021 of q, settlement 0.29 %, 16.8 CG iterations a step against 15.8)."""
-    scene = load_scene("terzaghi", COARSE + PROJECTION + ["time.dt=2.4e-5",
-                                                          f"time.integrator='{integrator}'"])
+def test_terzaghi_with_the_projection_at_the_solid_limit(tmp_path):
+    """The projection after the kick at the solid cap, to T_v = 0.5."""
+    scene = load_scene("terzaghi", COARSE + PROJECTION + ["time.dt=2.4e-5"])
     summary = run(scene, tmp_path, quiet=True)
     err = summary["errors"]
     bars = {"0.1": 0.006, "0.2": 0.006, "0.5": 0.005}
@@ -161,7 +162,8 @@ def test_one_sweep_step_records_the_whole_acceleration():
     from psph.run import make_slabs
 
     scene = load_scene("terzaghi", COARSE + PROJECTION + ["time.dt=2.4e-5",
-                                                          "time.integrator='euler'"])
+                                                          "time.integrator='euler'",
+                                                          FORCE_EULER])
     sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))
     for _ in range(400):  # into the loading, where the solve corrects v
         sim.advance_one()
