@@ -63,7 +63,7 @@ def main() -> None:
     OUT.mkdir(exist_ok=True)
     work = OUT / "rank_invariance"
     work.mkdir(exist_ok=True)
-    scenes = {"column": ("terzaghi", COLUMN),
+    scenes = {"column": ("terzaghi_tpi", COLUMN),
               "falling_block": (str(falling_far(work)), ["decomposition.rebalance_every=50"])}
     rows = []
     for label, (scene, sets) in scenes.items():

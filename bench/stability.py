@@ -46,7 +46,7 @@ def _run(overrides: list[str]) -> tuple[dict | None, dict, str | None]:
     from psph.run import run
     from psph.scene import load_scene
 
-    scene = load_scene("terzaghi", overrides)
+    scene = load_scene("terzaghi_tpi", overrides)
     with tempfile.TemporaryDirectory() as tmp:
         try:
             summary = run(scene, Path(tmp), comm=MPI.COMM_SELF, quiet=True)
@@ -67,7 +67,7 @@ def map_case(R: float, alpha: float, scheme: list[str] | None = None) -> dict:
     from psph.scene import fluid_dt_limit, load_scene
 
     # k such that dt_Eq42(k) = DT / R; Eq. (42) is proportional to 1/k
-    ref = load_scene("terzaghi", COLUMN + ["material.k=1e-3", "time.end=1.0"])
+    ref = load_scene("terzaghi_tpi", COLUMN + ["material.k=1e-3", "time.end=1.0"])
     k = 1e-3 * fluid_dt_limit(ref) * R / DT
     end = 0.001 + N_TPI * DT
     ov = COLUMN + [f"material.k={k!r}", f"time.dt={DT}", f"pressure.alpha={alpha}",
@@ -96,7 +96,7 @@ def long_run() -> dict:
     base = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[]",
             "output.interval=0.0", "output.times=[]", "output.history_interval=0.002",
             "pressure.alpha=0.5", "time.dt=5e-6"]  # the settings it was measured with
-    ref = from_scene(load_scene("terzaghi", base + ["time.end=1.0"]))
+    ref = from_scene(load_scene("terzaghi_tpi", base + ["time.end=1.0"]))
     end = ref.time_of(10.0)
     summary, hist, failure = _run(base + [f"time.end={end!r}"])
     if failure:

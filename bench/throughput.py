@@ -97,7 +97,7 @@ def main() -> None:
                      "particles": sim.n_global, "steps": steps, "seconds": secs,
                      "particle_steps_per_s_per_core": rate / ranks,
                      "steps_per_s": steps / secs})
-    scene = load_scene("terzaghi", ["pressure.explicit_until=0.0",
+    scene = load_scene("terzaghi_tpi", ["pressure.explicit_until=0.0",
                                     "boundaries.top.drained_from=0.0"])
     sim = Simulation(scene, make_slabs(scene, comm))
     steps = 20000

@@ -50,7 +50,7 @@ def cases(base: list[str]) -> list[tuple[str, list[str]]]:
     the projection over dt (to the solid cap) and the CG tolerance."""
     from psph.scene import fluid_dt_limit, load_scene, solid_dt_limit
 
-    scene = load_scene("terzaghi", base)
+    scene = load_scene("terzaghi_tpi", base)
     dt_l = fluid_dt_limit(scene)
     out = [("explicit", ["pressure.scheme='explicit'", f"time.dt={dt_l!r}"])]
     for dt in (2.5e-6, 5e-6, 1e-5):
@@ -115,7 +115,7 @@ def time_stepping_dt(scene) -> float:
     return time_stepping(scene).dt_explicit
 
 
-def run_case(overrides: list[str], name: str = "terzaghi") -> dict:
+def run_case(overrides: list[str], name: str = "terzaghi_tpi") -> dict:
     from mpi4py import MPI
 
     from psph.errors import NumericalError
@@ -260,7 +260,7 @@ def main() -> None:
         name, base, todo = "terzaghi_undrained", BASE, geotaichi_cases()
         column = "terzaghi_undrained: dx=0.02, 2 particles wide (100), k=2e-4, undrained start"
     else:
-        name, base = "terzaghi", BASE + (QUICK if args.quick else [])
+        name, base = "terzaghi_tpi", BASE + (QUICK if args.quick else [])
         todo = cases(base)
         column = "dx=0.02, k=8e-4" if args.quick else "dx=0.01, k=2e-4 (paper), 1000 particles"
     if args.only:

@@ -54,7 +54,7 @@ def run(alpha: float, k: float, dt: float, end: float, gravity: bool = True) -> 
         scene = ["geostatic_column", "--set", "pressure.scheme='tpi'",
                  "--set", "checkpoint.at_end=false", "--set", f"output.interval={end}"]
     else:
-        scene = ["terzaghi", "--set", "loads.0.pressure=5e4", "--set", "verification.tv=[]",
+        scene = ["terzaghi_tpi", "--set", "loads.0.pressure=5e4", "--set", "verification.tv=[]",
                  "--set", "time.integrator='symplectic'", "--set", "output.interval=0.0"]
     r = subprocess.run(
         [sys.executable, "-m", "psph", "run", *scene, "--quiet",

@@ -9,7 +9,7 @@ import pytest
 from psph.scene import builtin_dir
 from tests.helpers import assert_bad_input
 
-TERZAGHI = (builtin_dir() / "terzaghi.toml").read_text()
+TERZAGHI = (builtin_dir() / "terzaghi_tpi.toml").read_text()
 
 
 def run_cli(*args, cwd=None):
@@ -88,7 +88,7 @@ CASES = [
 @pytest.mark.parametrize("args,words", CASES, ids=[c[0][1] for c in CASES])
 def test_bad_value_exit_2_one_line_nothing_written(tmp_path, args, words):
     out = tmp_path / "out"
-    assert_bad_input(run_cli("run", "terzaghi", "--out", str(out), *args), words, out)
+    assert_bad_input(run_cli("run", "terzaghi_tpi", "--out", str(out), *args), words, out)
 
 
 def test_tpi_bound_can_be_overridden_explicitly():
@@ -97,7 +97,7 @@ def test_tpi_bound_can_be_overridden_explicitly():
     from psph.scene import load_scene, tpi_gain, tpi_gain_limit
 
     over = ["material.k=5e-5", "time.dt=1.2e-5", "pressure.allow_unstable=true"]
-    scene = load_scene("terzaghi", over)
+    scene = load_scene("terzaghi_tpi", over)
     assert tpi_gain(scene, scene.time.dt) > tpi_gain_limit(scene.pressure.alpha, False)
 
 
@@ -116,7 +116,7 @@ def test_output_directory_that_cannot_be_created_exit_2_one_line(tmp_path):
     blocker = tmp_path / "a_file"
     blocker.write_text("")
     out = blocker / "out"
-    r = run_cli("run", "terzaghi", "--out", str(out), "--set", "time.end=1e-4")
+    r = run_cli("run", "terzaghi_tpi", "--out", str(out), "--set", "time.end=1e-4")
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1, r.stderr
@@ -146,14 +146,14 @@ def test_existing_output_untouched_on_bad_input(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "summary.json").write_text("keep")
-    r = run_cli("run", "terzaghi", "--out", str(out), "--set", "material.E=0")
+    r = run_cli("run", "terzaghi_tpi", "--out", str(out), "--set", "material.E=0")
     assert r.returncode == 2
     assert (out / "summary.json").read_text() == "keep"
     assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
 
 
 def test_validate_prints_resolved_scene():
-    r = run_cli("validate", "terzaghi")
+    r = run_cli("validate", "terzaghi_tpi")
     assert r.returncode == 0
     assert "end = " in r.stdout and "h_factor = 1.2" in r.stdout
 
@@ -165,17 +165,17 @@ def test_list_names_builtin_scenes():
     assert names == ["collapse_dry", "collapse_saturated_psi-5", "collapse_saturated_psi0",
                      "collapse_saturated_psi2.5", "geostatic_column", "harmonic",
                      "retrogressive_k0_0.5", "retrogressive_k0_1.5", "slope_section",
-                     "strip_footing", "terzaghi", "terzaghi_undrained"]
+                     "strip_footing", "terzaghi", "terzaghi_tpi", "terzaghi_undrained"]
 
 
 def test_set_override_reaches_resolved_scene(tmp_path):
-    r = run_cli("validate", "terzaghi", "--set", "material.E=3e7")
+    r = run_cli("validate", "terzaghi_tpi", "--set", "material.E=3e7")
     assert r.returncode == 0 and "E = 30000000.0" in r.stdout
 
 
 def test_resolved_scene_reruns_identically(tmp_path):
     """OUT/scene.toml is a complete scene: validating it gives the same resolved scene."""
-    first = run_cli("validate", "terzaghi").stdout
+    first = run_cli("validate", "terzaghi_tpi").stdout
     f = Path(tmp_path) / "resolved.toml"
     f.write_text(first)
     assert run_cli("validate", str(f)).stdout == first

@@ -299,7 +299,7 @@ def test_bad_polyline_exit_2_one_line_nothing_written(tmp_path, line, words):
 
 def test_projection_with_polylines_is_refused():
     with pytest.raises(Exception, match="not yet with boundaries.polylines"):
-        load_scene("terzaghi", ["pressure.scheme='projection'",
+        load_scene("terzaghi_tpi", ["pressure.scheme='projection'",
                                 "time.integrator='symplectic'",
                                 "boundaries.polylines=[{points=[[0.0, 0.0], [0.1, 0.0]], "
                                 "soil='above'}]"])

@@ -28,7 +28,7 @@ def test_local_launcher_finishes_a_run_over_several_segments(tmp_path):
     env = dict(os.environ, NP="2", WALL="7", MAX_SEGMENTS="40",
                EXTRA="--set particles.dx=0.02 --set material.k=8e-4 --set time.end=0.2 "
                      "--set verification.tv=[] --set output.interval=0.05")
-    r = subprocess.run([str(JOBS / "local.sh"), "terzaghi", str(out)], env=env,
+    r = subprocess.run([str(JOBS / "local.sh"), "terzaghi_tpi", str(out)], env=env,
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
     assert "segment 2:" in r.stderr, r.stderr[-3000:]  # at least one wall-time stop

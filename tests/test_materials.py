@@ -315,7 +315,7 @@ def test_bad_materials_exit_2_one_line_nothing_written(tmp_path, text, words):
 
 
 def test_a_named_source_with_one_material_table_exit_2(tmp_path):
-    r = _cli("run", "terzaghi", "--out", str(tmp_path / "out"),
+    r = _cli("run", "terzaghi_tpi", "--out", str(tmp_path / "out"),
              "--set", "particles.blocks.0.material='clay'")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "particles.blocks[0].material" in r.stderr and "no such material" in r.stderr

@@ -93,7 +93,7 @@ def test_consolidation_column_one_vs_two_ranks_bitwise(tmp_path_factory):
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    _one_vs_two(comm, load_scene("terzaghi", COLUMN), out)
+    _one_vs_two(comm, load_scene("terzaghi_tpi", COLUMN), out)
 
 
 # a small dry collapse (400 particles, 2896 steps) with the regularised softening of
@@ -156,7 +156,7 @@ def test_shepard_and_eq47_column_one_vs_two_ranks_bitwise(tmp_path_factory):
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    scene = load_scene("terzaghi", COLUMN + ["stabilisation.shepard_every=7",
+    scene = load_scene("terzaghi_tpi", COLUMN + ["stabilisation.shepard_every=7",
                                              "stabilisation.shepard_stress=true",
                                              "pressure.beta=0.04"])
     _one_vs_two(comm, scene, out)
@@ -192,7 +192,7 @@ def test_symplectic_step_one_vs_two_ranks_bitwise(tmp_path_factory):
     comm.Barrier()
     scene = load_scene(str(out / "falling.toml"), ['time.integrator="symplectic"'])
     _one_vs_two(comm, scene, out)
-    column = load_scene("terzaghi", COLUMN + ['time.integrator="symplectic"',
+    column = load_scene("terzaghi_tpi", COLUMN + ['time.integrator="symplectic"',
                                              "stabilisation.shepard_every=7"])
     _one_vs_two(comm, column, out / "column")
 
@@ -229,7 +229,7 @@ def test_pressure_projection_one_vs_two_ranks_bitwise(tmp_path_factory, integrat
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    scene = load_scene("terzaghi", COLUMN + PROJECTION + [f"time.integrator='{integrator}'",
+    scene = load_scene("terzaghi_tpi", COLUMN + PROJECTION + [f"time.integrator='{integrator}'",
                                                           "pressure.allow_unstable=true"])
     _one_vs_two(comm, scene, out)
     if comm.Get_rank() == 0:

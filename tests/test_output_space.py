@@ -20,13 +20,13 @@ def test_full_disk_stops_with_one_line_naming_the_checkpoint_to_continue_from(
         return 10 ** 12 if not (out / "checkpoint.h5").exists() else 1000
 
     monkeypatch.setattr(space, "free_bytes", free)
-    assert cli.main(["run", "terzaghi", "--out", str(out), *RUN]) == 74
+    assert cli.main(["run", "terzaghi_tpi", "--out", str(out), *RUN]) == 74
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1, lines
     assert "no space left on device" in lines[0]
     assert f"--restart {out / 'checkpoint.h5'}" in lines[0] and "(step 500," in lines[0]
     monkeypatch.setattr(space, "free_bytes", lambda directory: 10 ** 12)
-    assert cli.main(["run", "terzaghi", "--restart", str(out / "checkpoint.h5"), *RUN]) == 0
+    assert cli.main(["run", "terzaghi_tpi", "--restart", str(out / "checkpoint.h5"), *RUN]) == 0
 
 
 def test_a_failed_checkpoint_write_removes_its_tmp_file(tmp_path, monkeypatch, capsys):
@@ -40,12 +40,12 @@ def test_a_failed_checkpoint_write_removes_its_tmp_file(tmp_path, monkeypatch, c
         raise OSError(122, "Disk quota exceeded")
 
     monkeypatch.setattr(psph.run, "write_checkpoint", failing)
-    assert cli.main(["run", "terzaghi", "--out", str(out), *RUN]) == 74
+    assert cli.main(["run", "terzaghi_tpi", "--out", str(out), *RUN]) == 74
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "Disk quota exceeded" in lines[0], lines
     assert not (out / "checkpoint.h5.tmp").exists()
     assert len(read_snapshots(out / "particles.h5")) >= 1  # the snapshots stay readable
     (out / "checkpoint.h5.tmp").write_bytes(b"stale")  # a write cut short by a kill ...
     monkeypatch.undo()
-    assert cli.main(["run", "terzaghi", "--out", str(out), *RUN]) == 0
+    assert cli.main(["run", "terzaghi_tpi", "--out", str(out), *RUN]) == 0
     assert not (out / "checkpoint.h5.tmp").exists()  # ... goes at the next start

@@ -146,7 +146,7 @@ def test_restart_continues_bitwise_on_same_and_other_rank_count(tmp_path_factory
 
     comm = _world()
     out = shared_tmp(comm, tmp_path_factory)
-    scene = load_scene("terzaghi", COLUMN + ["checkpoint.every=35600",
+    scene = load_scene("terzaghi_tpi", COLUMN + ["checkpoint.every=35600",
                                              "checkpoint.at_end=false"])
     run(scene, out / "full", comm=comm, quiet=True)
     if comm.Get_rank() == 0:
@@ -177,7 +177,7 @@ def test_sigterm_on_one_rank_leaves_a_valid_checkpoint(tmp_path_factory):
     the checkpoint; restarting from it matches an uninterrupted run bitwise."""
     comm = _world()
     out = shared_tmp(comm, tmp_path_factory)
-    long = load_scene("terzaghi", COLUMN[:2] + ["time.end=0.5", "verification.tv=[]",
+    long = load_scene("terzaghi_tpi", COLUMN[:2] + ["time.end=0.5", "verification.tv=[]",
                                                 "checkpoint.wall_seconds=0"])
     if comm.Get_rank() == 1:
         def kill_when_running():
@@ -195,7 +195,7 @@ def test_sigterm_on_one_rank_leaves_a_valid_checkpoint(tmp_path_factory):
     assert status == "interrupted"
 
     t_end = f"time.end={meta['t'] + 0.002!r}"
-    short = load_scene("terzaghi", COLUMN[:2] + [t_end, "verification.tv=[]"])
+    short = load_scene("terzaghi_tpi", COLUMN[:2] + [t_end, "verification.tv=[]"])
     run(short, out / "cut", comm=comm, quiet=True, restart=out / "cut" / "checkpoint.h5")
     run(short, out / "whole", comm=comm, quiet=True)
     problem = _on_rank0(comm, lambda: compare_runs(
@@ -222,7 +222,7 @@ def test_nan_on_one_rank_stops_all_ranks_with_exit_3(tmp_path_factory, monkeypat
             self.store.p[top] = np.nan
 
     monkeypatch.setattr(Simulation, "_update", poisoned)
-    code = cli.main(["run", "terzaghi", "--out", str(out / "bad"), "--quiet",
+    code = cli.main(["run", "terzaghi_tpi", "--out", str(out / "bad"), "--quiet",
                      "--set", "checkpoint.every=1000", *sum((["--set", s] for s in COLUMN), [])])
     codes = comm.allgather(code)
     assert codes == [3, 3]

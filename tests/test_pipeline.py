@@ -15,7 +15,7 @@ SMALL = ["particles.dx=0.05", "verification.tv=[]", "time.end=0.002"]
 def _stages(overrides):
     from mpi4py import MPI
 
-    scene = load_scene("terzaghi", SMALL + overrides)
+    scene = load_scene("terzaghi_tpi", SMALL + overrides)
     return [s.name for s in Simulation(scene, make_slabs(scene, MPI.COMM_SELF)).stages]
 
 
@@ -50,7 +50,7 @@ def test_only_needed_stages(overrides, present, absent):
 def test_summary_lists_stages_and_times(tmp_path):
     from mpi4py import MPI
 
-    scene = load_scene("terzaghi", SMALL + ["stabilisation.shepard_every=4"])
+    scene = load_scene("terzaghi_tpi", SMALL + ["stabilisation.shepard_every=4"])
     run(scene, tmp_path, comm=MPI.COMM_SELF, quiet=True)
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["stages_run"] == ["reset_halo", "ghosts", "neighbours", "drained_planes",

@@ -39,7 +39,7 @@ def test_projection_runs_at_the_solid_limit_with_its_stage(integrator):
 
     from psph.run import make_slabs
 
-    scene = load_scene("terzaghi", COARSE + PROJECTION + [f"time.integrator='{integrator}'",
+    scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + [f"time.integrator='{integrator}'",
                                                           FORCE_EULER])
     scene.time.dt = None  # the scene's own dt off: the default step
     st = time_stepping(scene)
@@ -58,7 +58,7 @@ def test_projection_runs_at_the_solid_limit_with_its_stage(integrator):
 @pytest.mark.slow
 def test_terzaghi_with_the_projection_at_the_solid_limit(tmp_path):
     """The projection after the kick at the solid cap, to T_v = 0.5."""
-    scene = load_scene("terzaghi", COARSE + PROJECTION + ["time.dt=2.4e-5"])
+    scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + ["time.dt=2.4e-5"])
     summary = run(scene, tmp_path, quiet=True)
     err = summary["errors"]
     bars = {"0.1": 0.006, "0.2": 0.006, "0.5": 0.005}
@@ -109,7 +109,7 @@ def test_restart_with_the_projection_continues_bitwise(tmp_path):
 
     from tests.helpers import compare_runs
 
-    scene = load_scene("terzaghi", COARSE + PROJECTION + [
+    scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + [
         "time.dt=2.4e-5", "time.end=0.02", "verification.tv=[]", "checkpoint.every=500",
         "checkpoint.at_end=false"])
     run(scene, tmp_path / "full", quiet=True)
@@ -143,7 +143,7 @@ def test_twice_and_four_times_the_solid_limit_have_no_period_two_mode(tmp_path):
     the loading ramp passes at twice and four times the cap and p stays within its
     undrained value. (The whole runs are in `bench/time_vs_error.py`.)"""
     for factor in (2, 4):
-        scene = load_scene("terzaghi", COARSE + PROJECTION + [
+        scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + [
             f"time.dt={2.4e-5 * factor}", "time.allow_dt_above_solid_limit=true",
             "time.end=0.012", "verification.tv=[]"])
         out = tmp_path / f"x{factor}"
@@ -161,7 +161,7 @@ def test_one_sweep_step_records_the_whole_acceleration():
 
     from psph.run import make_slabs
 
-    scene = load_scene("terzaghi", COARSE + PROJECTION + ["time.dt=2.4e-5",
+    scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + ["time.dt=2.4e-5",
                                                           "time.integrator='euler'",
                                                           FORCE_EULER])
     sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))

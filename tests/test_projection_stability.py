@@ -41,7 +41,7 @@ def test_the_issue_command_with_the_one_sweep_step_is_refused(tmp_path):
     """The issue's command with the one-sweep step named: exit 2, one line naming the
     key, the value, the rule and the stable step of the symplectic one, nothing written."""
     out = tmp_path / "out"
-    r = _cli("run", "terzaghi", "--out", str(out), "--set", "pressure.scheme='projection'",
+    r = _cli("run", "terzaghi_tpi", "--out", str(out), "--set", "pressure.scheme='projection'",
              "--set", "time.integrator='euler'", "--set", "time.dt=1.0e-5")
     assert_bad_input(r, ["time.integrator", "euler", "no stable step", "symplectic",
                          "Eq. (41) 1.200e-05 s"], out)
@@ -50,23 +50,23 @@ def test_the_issue_command_with_the_one_sweep_step_is_refused(tmp_path):
 def test_the_projection_takes_the_symplectic_step_by_default():
     """Without `time.integrator` the projection kicks first; the other schemes keep the
     one-sweep step; a given integrator is kept."""
-    assert load_scene("terzaghi", PROJECTION).time.integrator == "symplectic"
-    assert load_scene("terzaghi").time.integrator == "euler"
-    assert load_scene("terzaghi", ["pressure.scheme='explicit'", "time.dt=2e-7"]
+    assert load_scene("terzaghi_tpi", PROJECTION).time.integrator == "symplectic"
+    assert load_scene("terzaghi_tpi").time.integrator == "euler"
+    assert load_scene("terzaghi_tpi", ["pressure.scheme='explicit'", "time.dt=2e-7"]
                       ).time.integrator == "euler"
-    assert load_scene("terzaghi", ["time.integrator='symplectic'"]).time.integrator \
+    assert load_scene("terzaghi_tpi", ["time.integrator='symplectic'"]).time.integrator \
         == "symplectic"
-    forced = load_scene("terzaghi", PROJECTION + ["time.integrator='euler'",
+    forced = load_scene("terzaghi_tpi", PROJECTION + ["time.integrator='euler'",
                                                   "pressure.allow_unstable=true"])
     assert forced.time.integrator == "euler"
 
 
 def test_the_projection_above_the_solid_cap_is_refused(tmp_path):
     """The accepted region ends at Eq. (41): 1 % above it is exit 2 naming the bound."""
-    cap = solid_dt_limit(load_scene("terzaghi", CI + PROJECTION))
-    assert load_scene("terzaghi", CI + PROJECTION + [f"time.dt={cap!r}"]).time.dt == cap
+    cap = solid_dt_limit(load_scene("terzaghi_tpi", CI + PROJECTION))
+    assert load_scene("terzaghi_tpi", CI + PROJECTION + [f"time.dt={cap!r}"]).time.dt == cap
     out = tmp_path / "out"
-    r = _cli("run", "terzaghi", "--out", str(out), *sum(
+    r = _cli("run", "terzaghi_tpi", "--out", str(out), *sum(
         (["--set", s] for s in CI + PROJECTION + [f"time.dt={1.01 * cap!r}"]), []))
     assert_bad_input(r, ["time.dt", "above the solid limit Eq. (41)", f"{cap:.3e}"], out)
 
@@ -75,7 +75,7 @@ def test_the_projection_above_the_solid_cap_is_refused(tmp_path):
 def test_the_symplectic_projection_at_the_solid_cap_runs_to_tv_1(tmp_path):
     """Inside the region: the default step (Eq. 41, 2.4e-5 s) runs the CI column to
     T_v = 1 with p bounded and within 1 % of q at every T_v (measured 2026-12-02)."""
-    scene = load_scene("terzaghi", CI + PROJECTION + [
+    scene = load_scene("terzaghi_tpi", CI + PROJECTION + [
         "verification.tv=[0.05, 0.1, 0.2, 0.5, 1.0]", "pressure.tolerance=1e-6"])
     scene.time.dt = None  # the scene's TPI step off: the projection's default
     summary = run(scene, tmp_path, quiet=True)
@@ -94,8 +94,8 @@ def test_the_one_sweep_projection_grows_at_and_below_the_solid_cap(tmp_path, sha
     """Why it is refused: forced, the one-sweep step at Eq. (41) grows after 0.4 s and at
     half of it during the undrained loading (the run still exits 0: p is bounded only
     by the particles staying in the box)."""
-    cap = solid_dt_limit(load_scene("terzaghi", CI + PROJECTION))
-    scene = load_scene("terzaghi", CI + PROJECTION + [
+    cap = solid_dt_limit(load_scene("terzaghi_tpi", CI + PROJECTION))
+    scene = load_scene("terzaghi_tpi", CI + PROJECTION + [
         "time.integrator='euler'", "pressure.allow_unstable=true", f"time.dt={share * cap!r}",
         f"time.end={grown_by}", "verification.tv=[]"])
     run(scene, tmp_path, quiet=True)

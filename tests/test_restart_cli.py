@@ -27,14 +27,14 @@ def cli(*args, **kw):
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("cli") / "run"
-    r = cli("run", "terzaghi", "--out", str(out), "--quiet", *SMALL, "--set", "time.end=0.006")
+    r = cli("run", "terzaghi_tpi", "--out", str(out), "--quiet", *SMALL, "--set", "time.end=0.006")
     assert r.returncode == 0, r.stderr
     return out
 
 
 def test_sigterm_checkpoints_and_exits_75_then_restart_finishes(tmp_path):
     out = tmp_path / "run"
-    args = ["run", "terzaghi", "--out", str(out), "--quiet", *SMALL]
+    args = ["run", "terzaghi_tpi", "--out", str(out), "--quiet", *SMALL]
     proc = subprocess.Popen([sys.executable, "-m", "psph", *args, "--set", "time.end=1.0"],
                             stderr=subprocess.PIPE, text=True)
     t0 = time.time()
@@ -52,7 +52,7 @@ def test_sigterm_checkpoints_and_exits_75_then_restart_finishes(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted"
     # continue to a little later than the checkpoint; --out defaults to its directory
-    r = cli("run", "terzaghi", "--quiet", *SMALL, "--set", f"time.end={meta['t'] + 1e-3!r}",
+    r = cli("run", "terzaghi_tpi", "--quiet", *SMALL, "--set", f"time.end={meta['t'] + 1e-3!r}",
             "--restart", str(out / "checkpoint.h5"))
     assert r.returncode == 0, r.stderr
     summary = json.loads((out / "summary.json").read_text())
@@ -68,7 +68,7 @@ def test_a_stop_signal_during_start_up_is_honoured_not_fatal(tmp_path):
     fixed wall-time signal hit in jobs/local.sh when a segment started or finished near
     it. Now it is recorded and the run stops at once with its checkpoint (exit 75)."""
     out = tmp_path / "run"
-    proc = subprocess.Popen([sys.executable, "-m", "psph", "run", "terzaghi", "--out",
+    proc = subprocess.Popen([sys.executable, "-m", "psph", "run", "terzaghi_tpi", "--out",
                              str(out), "--quiet", *SMALL, "--set", "time.end=1.0"],
                             stderr=subprocess.PIPE, text=True)
     time.sleep(0.3)
@@ -81,7 +81,7 @@ def test_a_stop_signal_during_start_up_is_honoured_not_fatal(tmp_path):
 
 
 def test_restart_refuses_changed_physics(finished):
-    r = cli("run", "terzaghi", "--quiet", *SMALL, "--set", "time.end=0.006",
+    r = cli("run", "terzaghi_tpi", "--quiet", *SMALL, "--set", "time.end=0.006",
             "--set", "material.E=3e7", "--restart", str(finished / "checkpoint.h5"))
     assert r.returncode == 2
     line = r.stderr.strip()
@@ -101,7 +101,7 @@ def test_unreadable_checkpoint_is_one_line_exit_2(finished, tmp_path, damage):
         bad.write_bytes(src)
         with h5py.File(bad, "a") as f:
             del f.attrs["complete"]
-    r = cli("run", "terzaghi", "--out", str(tmp_path / "o"), *SMALL, "--set", "time.end=0.006",
+    r = cli("run", "terzaghi_tpi", "--out", str(tmp_path / "o"), *SMALL, "--set", "time.end=0.006",
             "--restart", str(bad))
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr

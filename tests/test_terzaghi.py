@@ -26,7 +26,7 @@ SWITCH_WINDOW = ["verification.tv=[]", "time.end=0.03"]
 @pytest.fixture(scope="module")
 def explicit_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("explicit")
-    scene = load_scene("terzaghi", COARSE + SWITCH_WINDOW + ["pressure.scheme='explicit'",
+    scene = load_scene("terzaghi_tpi", COARSE + SWITCH_WINDOW + ["pressure.scheme='explicit'",
                                                              "time.dt=2.8e-7"])
     assert scene.time.dt <= time_stepping(scene).limits["dt_fluid_eq42"]
     run(scene, out, quiet=True)
@@ -59,7 +59,7 @@ def _check(summary):
 
 @pytest.mark.slow
 def test_tpi_alpha_half_at_R17(tmp_path):
-    scene = load_scene("terzaghi", COARSE + ["pressure.alpha=0.5"])
+    scene = load_scene("terzaghi_tpi", COARSE + ["pressure.alpha=0.5"])
     st = time_stepping(scene)
     R = st.dt_main / st.limits["dt_fluid_eq42"]
     assert 16 < R < 19
@@ -79,7 +79,7 @@ def test_no_pressure_spike_at_the_drained_switch(tmp_path, explicit_run):
     loading stage. The ramp's end and the drainage start a pressure wave (present in the
     all-explicit run too); the switch of scheme must not add to it: over 0.01-0.03 s the
     base and mid-depth pressures stay inside the explicit run's envelope."""
-    run(load_scene("terzaghi", COARSE + SWITCH_WINDOW), tmp_path, quiet=True)
+    run(load_scene("terzaghi_tpi", COARSE + SWITCH_WINDOW), tmp_path, quiet=True)
     tpi = _history(tmp_path / "history.csv")
     exp = _history(explicit_run / "history.csv")
     for h in (tpi, exp):
@@ -93,7 +93,7 @@ def test_no_pressure_spike_at_the_drained_switch(tmp_path, explicit_run):
 @pytest.mark.slow
 def test_tpi_alpha_07_at_R35(tmp_path):
     """The paper's Fig. 4(b): at R = 35, near the solid cap Eq. (41), alpha = 0.7 matches."""
-    scene = load_scene("terzaghi", COARSE + ["time.dt=1e-5", "pressure.alpha=0.7"])
+    scene = load_scene("terzaghi_tpi", COARSE + ["time.dt=1e-5", "pressure.alpha=0.7"])
     st = time_stepping(scene)
     R = st.dt_main / st.limits["dt_fluid_eq42"]
     assert 34 < R < 37
@@ -120,7 +120,7 @@ def test_explicit_and_tpi_agree_at_the_explicit_dt(tmp_path):
     common.append(f"time.dt={fluid_dt_limit(load_scene('terzaghi', common))!r}")
     last = {}
     for scheme in ("explicit", "tpi"):
-        run(load_scene("terzaghi", common + [f"pressure.scheme='{scheme}'"]),
+        run(load_scene("terzaghi_tpi", common + [f"pressure.scheme='{scheme}'"]),
             tmp_path / scheme, quiet=True)
         last[scheme] = read_snapshots(tmp_path / scheme / "particles.h5")[-2:]
     for a, b in zip(last["explicit"], last["tpi"], strict=True):
@@ -130,7 +130,7 @@ def test_explicit_and_tpi_agree_at_the_explicit_dt(tmp_path):
         # where the explicit column sits 1.7 % of q below TPI (and the analytical p0)
         assert np.max(np.abs(a["p"] - b["p"])) / 1e4 < 0.02
         # the top row's displacement, dx / 2 below the surface
-        exact = float(terzaghi.from_scene(load_scene("terzaghi", common)).displacement(
+        exact = float(terzaghi.from_scene(load_scene("terzaghi_tpi", common)).displacement(
             0.5 * 0.02, a["time"])[0])
         for snap in (a, b):
             top = snap["x"][:, 1] > snap["x"][:, 1].max() - 0.5 * 0.02
@@ -184,11 +184,11 @@ def test_reference_follows_the_drainage(ends):
 def test_scene_drainage_sets_the_reference():
     """A column drained at both ends is measured against H_d = H / 2 (before: against the
     top-drained solution, an error of 0.99 q)."""
-    both = load_scene("terzaghi", COARSE + [
+    both = load_scene("terzaghi_tpi", COARSE + [
         "boundaries.bottom={motion='fixed', flow='drained', drained_from=0.01}"])
     ref = terzaghi.from_scene(both)
     assert (ref.drainage, ref.drainage_length, ref.t_drain) == ("both", 0.5, 0.01)
-    assert terzaghi.from_scene(load_scene("terzaghi", COARSE)).drainage == "top"
+    assert terzaghi.from_scene(load_scene("terzaghi_tpi", COARSE)).drainage == "top"
 
 
 @pytest.mark.slow
@@ -201,7 +201,7 @@ def test_tpi_double_drained_column(tmp_path):
     0.058, 0.025, 0.012. This column reaches T_v = 0.1 2.6 ms after the drained switch,
     inside the drainage wave's first transits, which the quasi-static reference does not
     have; with the projection the same column gives 0.027, 0.009, 0.010."""
-    scene = load_scene("terzaghi", COARSE + [
+    scene = load_scene("terzaghi_tpi", COARSE + [
         "boundaries.bottom={motion='fixed', flow='drained', drained_from=0.01}"])
     err = run(scene, tmp_path, quiet=True)["errors"]
     bars = {"0.1": 0.045, "0.2": 0.025, "0.5": 0.027}
@@ -223,7 +223,7 @@ def test_mass_balance_residual_monitor(tmp_path):
     def residuals(scheme, dt, out):
         over = COARSE + [f"pressure.scheme='{scheme}'", f"time.dt={dt}", "time.end=0.015",
                          "verification.tv=[]"]
-        run(load_scene("terzaghi", over), out, quiet=True)
+        run(load_scene("terzaghi_tpi", over), out, quiet=True)
         rows = list(csv.DictReader((out / "history.csv").open()))
         t = np.array([float(r["time"]) for r in rows])
         return t, np.array([float(r["mass_balance_residual"]) for r in rows])

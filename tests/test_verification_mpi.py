@@ -81,3 +81,24 @@ def test_strip_footing_loading_stage_with_the_projection(tmp_path_factory):
     scene = _at_solid_cap("strip_footing", ["time.end=0.1", "output.times=[]",
                                              "output.interval=0.0"])
     _check_strip_loading(run(scene, out / "strip_projection", quiet=True)["errors"])
+
+
+@pytest.mark.mpi(min_size=2)
+def test_the_default_run_is_within_one_percent_of_q(tmp_path_factory):
+    """`make run`'s scene as it is (the paper's Section 4.1 column, the projection after
+    the kick at C_CFL^s = 0.4, issue 36) on 2 ranks: within 1 % of q at every T_v to 1,
+    the settlement within 1 %, p bounded throughout (issue 39's sweep row "default")."""
+    import numpy as np
+    from mpi4py import MPI
+
+    out = shared_tmp(MPI.COMM_WORLD, tmp_path_factory) / "default"
+    summary = run(load_scene("terzaghi"), out, quiet=True)
+    err = summary["errors"]
+    assert set(err["pressure"]) == {"0.05", "0.1", "0.2", "0.5", "1"}
+    for tv, e in err["pressure"].items():
+        assert e["max_abs_p_error_over_q"] < 0.01, (tv, e)
+    assert err["settlement_max_abs_error_over_final"] < 0.01, err
+    assert summary["dt"]["main_s"] == pytest.approx(4.8e-5, rel=1e-12)
+    if MPI.COMM_WORLD.Get_rank() == 0:
+        h = np.genfromtxt(out / "history.csv", delimiter=",", names=True)
+        assert h["p_max"].max() < 1.2e4 and h["p_min"].min() > -1e3
