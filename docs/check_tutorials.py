@@ -113,8 +113,9 @@ def run_page(page: Path, venv: Path, keep: bool) -> tuple[int, list[str]]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("pages", nargs="*", type=Path)
-    ap.add_argument("--venv", type=Path, default=ROOT / ".venv",
-                    help="the environment the commands' .venv/bin/python is (default: .venv)")
+    ap.add_argument("--venv", type=Path, default=Path(sys.prefix),
+                    help="the environment the commands' .venv/bin/python is (default: the "
+                         "one running this script, as `make docs-check` runs it from .venv)")
     ap.add_argument("--keep", action="store_true", help="keep the scratch directories")
     a = ap.parse_args(argv)
     pages = a.pages or sorted((DOCS / "tutorials").glob("*.md"))
