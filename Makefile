@@ -24,7 +24,8 @@ STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
 	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-eq47-step bench-field \
-	bench-field-window bench-large bench-convergence bench-convergence-quick lint clean-env
+	bench-field-window bench-large bench-convergence bench-convergence-quick lint clean-env \
+	docs docs-check
 
 env: $(STAMP)
 
@@ -40,7 +41,7 @@ $(STAMP): pyproject.toml
 	@$(VPY) -c "import h5py, sys; sys.exit(0 if h5py.get_config().mpi else 1)" 2>/dev/null || \
 	  CC=mpicc HDF5_MPI=ON HDF5_PKGCONFIG_NAME=hdf5-openmpi \
 	  $(VPY) -m pip install -q --force-reinstall --no-deps --no-binary=h5py --no-build-isolation h5py
-	$(VPY) -m pip install -q -e '.[dev]'
+	$(VPY) -m pip install -q -e '.[dev,docs]'
 	$(VPY) -c "import h5py, mpi4py, numba; assert h5py.get_config().mpi, 'h5py lacks MPI'"
 	@touch $@
 
@@ -114,6 +115,15 @@ bench-convergence-quick: env
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env
 	$(VPY) bench/rank_invariance.py
+
+# the documentation site (Sphinx + MyST) into docs/_build/html: any warning fails, internal
+# links included; docs/reference/scene_keys.md is generated from the scene schema
+docs: env
+	$(VPY) -m sphinx -W --keep-going -n -q -b html docs docs/_build/html
+
+# the tutorials' marked command blocks, run in scratch directories (docs/check_tutorials.py)
+docs-check: env
+	$(VPY) docs/check_tutorials.py
 
 lint: env
 	$(VENV)/bin/ruff check psph tests bench
