@@ -5,7 +5,7 @@ accepts for it, the solid cap Eq. (41), f from 0.25 to 2, after the kick ("sympl
 the projection's default) and in the one-sweep step ("euler", which validation refuses
 with the projection; forced here with pressure.allow_unstable), on 1 and 2 ranks, to
 the scene's end time. A run is stable when it exits 0
-and its pore pressure stays within [-0.05 q, 1.05 q] in every history row (the CI
+and its pore pressure stays within [-0.1 q, 1.2 q] in every history row (the CI
 column at the one-sweep step's Eq. (41) ran to its end with p at 13 q: the exit code
 alone does not tell). The error is max |p - p_a| / q over the scene's T_v.
 
@@ -62,9 +62,9 @@ def stable_step(column: str) -> float:
 
 def cases(full: bool = False) -> list[dict]:
     """Every column x integrator x FACTORS x ranks 1, 2 with `full`; by default the
-    paper's column (1000 particles, to 1.7 s) only at f >= 0.5 after the kick and on
-    2 ranks only at f = 1 (f = 0.25 after the kick there is 560k steps), and the refused
-    one-sweep step on 1 rank (it is bitwise the same on 2: tests/test_mpi.py)."""
+    paper's column and the default scene (1000 particles, to 1.7 s) only at f >= 1 and
+    on 2 ranks only at f = 1 (f = 0.25 after the kick there is 560k steps), and the
+    refused one-sweep step on 1 rank (it is bitwise the same on 2: tests/test_mpi.py)."""
     out = []
     for column in COLUMNS:
         for integrator in ("symplectic", "euler"):
@@ -73,7 +73,7 @@ def cases(full: bool = False) -> list[dict]:
                 for ranks in (1, 2):
                     big = column in ("paper", "default")
                     if not full and (
-                            (big and integrator == "symplectic" and f < 0.5)
+                            (big and f < 1.0)
                             or (column == "default" and (integrator == "euler" or f < 1.0))
                             or (ranks == 2 and (integrator == "euler" or
                                                 (big and f != 1.0)))):
@@ -100,7 +100,8 @@ def run_case(case: dict) -> dict:
             cmd = ["mpirun", "-n", str(case["ranks"])] + cmd
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True,
-                              env=dict(os.environ, NUMBA_NUM_THREADS="1"))
+                              env=dict(os.environ, NUMBA_NUM_THREADS="1",
+                                       OMPI_MCA_mpi_yield_when_idle="1"))
         wall = time.perf_counter() - t0
         result = dict(case, rc=proc.returncode, wall_s=wall, error=None, p_max=None,
                       p_min=None, failure=None)
@@ -119,9 +120,15 @@ def run_case(case: dict) -> dict:
         if summ.exists():
             errors = json.loads(summ.read_text()).get("errors") or {}
             result["error"] = errors.get("max_abs_p_error_over_q")
-    result["stable"] = bool(result["rc"] == 0 and result["p_max"] is not None
-                            and result["p_max"] <= 1.05 * Q and result["p_min"] >= -0.05 * Q)
+    result["stable"] = stable(result)
     return result
+
+
+def stable(r: dict) -> bool:
+    """Exit 0 and p within [-0.1 q, 1.2 q] in every history row (the loading ramp's
+    undrained overshoot reaches 1.11 q on the CI column; a growing mode leaves it)."""
+    return bool(r["rc"] == 0 and r["p_max"] is not None and r["p_max"] <= 1.2 * Q
+                and r["p_min"] >= -0.1 * Q)
 
 
 def table(rows: list[dict]) -> str:
@@ -169,18 +176,34 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--full", action="store_true", help="every factor on 1 and 2 ranks")
+    ap.add_argument("--fresh", action="store_true", help="forget the rows of a stopped sweep")
     args = ap.parse_args()
     OUT.mkdir(exist_ok=True)
     stem = "projection_stability" + ("-only" if args.only else "-full" if args.full else "")
     if args.plot_only:
         rows = json.loads((OUT / f"{stem}.json").read_text())["rows"]
+        for r in rows:
+            r["stable"] = stable(r)
     else:
         todo = [c for c in cases(args.full) if not args.only or re.search(args.only, c["label"])]
-        with ThreadPoolExecutor(args.jobs) as pool:
-            rows = []
-            for r in pool.map(run_case, todo):
-                rows.append(r)
+        # finished rows are kept case by case, so that a stopped sweep resumes
+        partial = OUT / f"{stem}.partial.jsonl"
+        if args.fresh:
+            partial.unlink(missing_ok=True)
+        done = {}
+        if partial.exists():
+            for line in partial.read_text().splitlines():
+                r = json.loads(line)
+                done[r["label"]] = r
+        rest = [c for c in todo if c["label"] not in done]
+        print(f"{len(todo) - len(rest)} of {len(todo)} cases from {partial}", flush=True)
+        with ThreadPoolExecutor(args.jobs) as pool, partial.open("a") as log:
+            for r in pool.map(run_case, rest):
+                done[r["label"]] = r
+                log.write(json.dumps(r) + "\n")
+                log.flush()
                 print(table([r]).splitlines()[-1], flush=True)
+        rows = [done[c["label"]] for c in todo]
         (OUT / f"{stem}.json").write_text(json.dumps(
             {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows},
             indent=1))
