@@ -8,7 +8,7 @@ stretched at its free surface expands plastically and its undrained pore water a
 with suction ("the soil above the phreatic line subsequently underwent volumetric
 dilation, and thus negative pore-water pressure", the paper on Fig. 16).
 
-    .venv/bin/python bench/collapse_suction.py runs/collapse_saturated_psi0 [RUN ...]
+    python bench/diagnostics/collapse_suction.py runs/collapse_saturated_psi0 [RUN ...]
 
 Prints a table per run and writes bench/out/collapse_suction.json.
 """
@@ -20,13 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
+from psph.config.load import run_scene
+from psph.io.snapshots import read_snapshots
+from psph.verify.element import sqrt_j2
+from psph.verify.pressure import PHREATIC_ROWS, mean_effective_stress, wet_threshold
 
-from psph.config.load import run_scene  # noqa: E402
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.verify.element import sqrt_j2  # noqa: E402
-from psph.verify.pressure import PHREATIC_ROWS, mean_effective_stress, wet_threshold  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def suction_rows(run: Path) -> list[dict]:

@@ -5,10 +5,10 @@ scene's) and 1e-5 s, with the scene's TPI and Eq. (47) (beta = 0.04), without Eq
 balance every step, `pressure.scheme = "projection"`). A scheme whose two steps give the
 same kinetic energy and most negative p is in its asymptotic range in dt here.
 
-    .venv/bin/python bench/eq47_step.py            # 8 runs on 1 rank, about 2.5 min
-    .venv/bin/python bench/eq47_step.py --plot-only
+    python bench/diagnostics/eq47_step.py            # 8 runs on 1 rank, about 2.5 min
+    python bench/diagnostics/eq47_step.py --plot-only
     git worktree add /tmp/psph-4b3af6e 4b3af6e     # Eq. (47) as printed (before the fix)
-    .venv/bin/python bench/eq47_step.py --root /tmp/psph-4b3af6e --tag printed
+    python bench/diagnostics/eq47_step.py --root /tmp/psph-4b3af6e --tag printed
 
 Prints the table (kinetic energy and most negative p of `history.csv`, interpolated to
 1, 2, 5 and 10 ms, and their change with the step), writes bench/out/eq47_step[-TAG].json and
@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-OUT = Path(__file__).parent / "out"
+ROOT = Path(__file__).resolve().parents[2]
+OUT = Path(__file__).resolve().parents[1] / "out"
 END = 0.0105  # history.csv has a row about every 1 ms: one past 10 ms before the end
 TIMES = (0.001, 0.002, 0.005, 0.01)
 STEPS = (2e-5, 1e-5)

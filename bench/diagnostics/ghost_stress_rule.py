@@ -1,11 +1,11 @@
 """Issue 16: what the wall ghosts' new stress rule changes in other scenes. Runs a built-in
 scene twice on one rank, with the ghosts as they were (every normal component of sigma'
-mirrored, `oddeven_experiment.mirror_ghosts`) and as they are (the wall-normal total
+mirrored, `oddeven_stress_mode.mirror_ghosts`) and as they are (the wall-normal total
 stress continued with its weight, psph/kernels/ghosts.py), and prints both and their
 largest particle-by-particle differences; `sliding` prints the table of
 `python -m psph.app.sliding` under the old rule (compare with the module as it is).
 
-usage (from the worktree): PYTHONPATH=. .venv/bin/python bench/issue16/ghost_rule_scenes.py
+usage (from the worktree): .venv/bin/python bench/diagnostics/ghost_stress_rule.py
   SCENE END | sliding
 
 Outcome (2026-11-30, serial):
@@ -17,7 +17,7 @@ Outcome (2026-11-30, serial):
     mirror 8.35 / 8.42 / -6.6 / -68.7, continued 8.33 / 8.41 / -8.5 / -67.0; every
     bottom-row excess 1.9-2.1 kPa more negative (the mirror's bottom row sank and
     compressed the base), sliding minus rest +0.5 kPa under both
-  TPI-gravity map (`bench/tpi_gravity.py`, geostatic column): unchanged, cell for cell
+  TPI-gravity map (`bench/verification/tpi_gravity.py`, geostatic column): unchanged, cell for cell
 """
 import sys
 from pathlib import Path
@@ -25,10 +25,9 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-sys.path.insert(0, ".")
-from psph.app.run import make_slabs  # noqa: E402
-from psph.config.load import load_scene  # noqa: E402
-from psph.solver.simulation import Simulation  # noqa: E402
+from psph.app.run import make_slabs
+from psph.config.load import load_scene
+from psph.solver.simulation import Simulation
 
 PLAIN = Simulation._ghosts
 

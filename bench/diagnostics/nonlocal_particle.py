@@ -3,7 +3,7 @@ its local eps_p, the average eps_bar over 2 l_c, the over-non-local eps_hat = (1
 eps_p + m eps_bar clipped at 0 (psph/kernels/nonlocal_strain.py), the dilation angle
 Eq. (19) gives for eps_hat and for eps_p, and its porosity (Eq. 24), at every snapshot.
 
-    .venv/bin/python bench/nonlocal_particle.py RUN ID [ID ...]
+    python bench/diagnostics/nonlocal_particle.py RUN ID [ID ...]
 
 eps_bar and eps_hat are computed from the snapshot by the solver's kernel
 (`nonlocal_strain`, with the walls' images), as each step does. Shows why
@@ -17,13 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
+from psph.config.boundaries import plane_walls
+from psph.config.load import run_scene
+from psph.io.snapshots import read_snapshots
+from psph.verify.nonlocal_average import nonlocal_strains
 
-from psph.config.boundaries import plane_walls  # noqa: E402
-from psph.config.load import run_scene  # noqa: E402
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.verify.nonlocal_average import nonlocal_strains  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def averages_of(snapshot: dict, i: int, lengths: np.ndarray, weights: np.ndarray,

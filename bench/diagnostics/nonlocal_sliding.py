@@ -10,7 +10,7 @@ basal traction from its momentum balance over the last 0.04 s, the bottom row's 
 Drucker-Prager strength, eps_p and eps_hat (the softening variable the return mapping
 used).
 
-    .venv/bin/python bench/nonlocal_sliding.py     # the table (about 15 s, one core)
+    python bench/diagnostics/nonlocal_sliding.py     # the table (about 15 s, one core)
 
 Cases: the local law, and the non-local one with m = 2 (the default, over-non-local)
 and m = 1 (the plain average). Writes bench/out/nonlocal_sliding.json and .png (basal
@@ -22,9 +22,8 @@ import json
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
-OUT = Path(__file__).parent / "out"
+ROOT = Path(__file__).resolve().parents[2]
+OUT = Path(__file__).resolve().parents[1] / "out"
 
 HEIGHT, LENGTH = 4.8, 9.6
 

@@ -4,20 +4,17 @@ eps_p = 10 on the wall y = 0 of a 40 x 20 lattice, at l_c = 1.5, 2.12 and 3 dx, 
 plain (m = 1) and the over-non-local (m = 2) average, from the solver's kernel
 (`nonlocal_strain`, with the wall's images).
 
-    .venv/bin/python bench/nonlocal_wall_band.py
+    python bench/diagnostics/nonlocal_wall_band.py
 
 The slope's basal band is such a band: l_c = 1.2 m is 2.12 dx at dx = 0.566 m and 3 dx
 at 0.4 m (README, "Convergence of the landslide answers").
 """
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent.parent))
-
-from psph.verify.nonlocal_average import nonlocal_strains  # noqa: E402
+from psph.verify.nonlocal_average import nonlocal_strains
 
 DX = 1.0
 RATIOS = (1.5, 2.12, 3.0)

@@ -7,7 +7,7 @@ particle centres to 1e-9. Errors in % of the base sigma'_v: "raw" per particle, 
 the mean of vertically adjacent particles (takes the zig-zag out), "@0.005" the raw error
 after the first 0.005 s, "acc0" the largest |a_y| of the first step (m/s^2) and its row.
 
-usage (from the worktree): PYTHONPATH=. .venv/bin/python bench/issue16/oddeven_experiment.py
+usage (from the worktree): .venv/bin/python bench/diagnostics/oddeven_stress_mode.py
   [VARIANT ...]   (default: all; each 8-20 s on one core)
 
 Outcome (2026-11-30, serial; "mirror" = the ghosts as before the fix, every normal
@@ -64,12 +64,11 @@ import sys
 
 import numpy as np
 from mpi4py import MPI
+from two_layer_column import LAYERED, row_pairs
 
-sys.path.insert(0, ".")
-from psph.app.run import make_slabs  # noqa: E402
-from psph.config.load import load_scene  # noqa: E402
-from psph.solver.simulation import Simulation  # noqa: E402
-from tests.test_materials import LAYERED, _row_pairs  # noqa: E402
+from psph.app.run import make_slabs
+from psph.config.load import load_scene
+from psph.solver.simulation import Simulation
 
 VARIANTS = ["layered_mirror", "uniform_mirror", "layered_mirror_equilibrate", "layered",
             "uniform", "uniform_top_wall", "layered_top_wall", "geostatic_mirror", "geostatic"]
@@ -131,7 +130,7 @@ def run(variant: str, end: float = 0.05) -> dict:
         if early is None and sim.t >= 0.005 - 1e-12:
             early = np.abs(st.stress[:n, 1] - sv0).max() / base
     raw = np.abs(st.stress[:n, 1] - sv0) / base
-    pair = np.abs(_row_pairs(st.stress[:n, 1], x0, y0) - _row_pairs(sv0, x0, y0)) / base
+    pair = np.abs(row_pairs(st.stress[:n, 1], x0, y0) - row_pairs(sv0, x0, y0)) / base
     pmax = p0.max()
     out.update(raw=raw.max(), raw_y=y0[raw.argmax()], paired=pair.max(), early=early,
                p=np.abs(st.p[:n] - p0).max() / pmax if pmax > 0 else 0.0,

@@ -3,7 +3,7 @@ psph/verify/pressure.py, side by side: over the ground surface's table
 (`excess_pressure`, what `psph plot` draws) and over the current phreatic line
 (`phreatic_excess`), with the pore pressure itself (issue 13, the psi = 0 line).
 
-    .venv/bin/python bench/phreatic_picture.py runs/collapse_saturated_psi0 \
+    python bench/diagnostics/phreatic_picture.py runs/collapse_saturated_psi0 \
         runs/collapse_saturated_psi2.5 --at 0.6 --png bench/out/phreatic.png
 
 One row per run: p, excess over the surface, excess over the phreatic line (kPa, one
@@ -18,12 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
+from psph.config.load import run_scene
+from psph.io.snapshots import read_snapshots
+from psph.verify.pressure import excess_pressure, phreatic_excess
 
-from psph.config.load import run_scene  # noqa: E402
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.verify.pressure import excess_pressure, phreatic_excess  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def panels(run: Path, at: float) -> tuple[dict, dict]:

@@ -1,7 +1,7 @@
 """Issue 16 experiment: a saturated layer at rest on a polyline (dipping with lattice steps,
 or horizontal at a chosen offset below a lattice row); excess p after t = 0.
 usage (from the worktree, PYTHONPATH=. so that its psph is imported):
-  dip_experiment.py VARIANT OUT [MOTION [EQUILIBRATE [KEY=VALUE ...]]]
+  polyline_dip_pressure.py VARIANT OUT [MOTION [EQUILIBRATE [KEY=VALUE ...]]]
   VARIANT: dip | flat_dx | flat_short | flat_long"""
 import sys
 

@@ -1,10 +1,10 @@
 """Field-scale timing: the retrogressive clay slope of Section 4.5 on 2 ranks.
 
-    python bench/field.py                       # retrogressive_k0_0.5, the full 40 s
-    python bench/field.py --window 0.5          # a short window (CI-sized check)
-    python bench/field.py --scene retrogressive_k0_1.5
-    python bench/field.py --scene slope_section --window 0.5   # issue 16's throughput check
-    python bench/field.py --plot-only
+    python bench/performance/field.py                       # retrogressive_k0_0.5, the full 40 s
+    python bench/performance/field.py --window 0.5          # a short window (CI-sized check)
+    python bench/performance/field.py --scene retrogressive_k0_1.5
+    python bench/performance/field.py --scene slope_section --window 0.5  # the section's throughput
+    python bench/performance/field.py --plot-only
 
 Prints a table (wall time, steps, particle-steps per second per core for the
 elastoplastic coupled step over the whole run and over its time steps alone ("stepping":
@@ -25,8 +25,8 @@ import time
 from datetime import date
 from pathlib import Path
 
-ROOT = Path(__file__).parent.parent
-OUT = Path(__file__).parent / "out"
+ROOT = Path(__file__).resolve().parents[2]
+OUT = Path(__file__).resolve().parents[1] / "out"
 FULL = 40.0
 BAR_S = 1800.0
 # Section 4.5: "the final run-out distance reaches 192 m" (K0 = 0.5); 186 m for K0 = 1.5
@@ -138,7 +138,7 @@ def plot(report: dict) -> None:
         left = [a + b for a, b in zip(left, w, strict=True)]
     ax2.set_xlabel("share of loop time (%), rank with the most")
     ax2.legend(fontsize=7, loc="lower left")
-    fig.suptitle(f"bench/field.py, {report['date']}, 2 ranks", fontsize=10)
+    fig.suptitle(f"bench/performance/field.py, {report['date']}, 2 ranks", fontsize=10)
     fig.tight_layout()
     fig.savefig(OUT / "field.png", dpi=100)
     print(f"wrote {OUT / 'field.png'}")

@@ -4,9 +4,9 @@ checkpoint, and restarts from it for 100 more; then the same scene's set-up (one
 checkpoint) on 1, 2 and 4 ranks (4 oversubscribed on 2 cores) shows the peak memory per
 rank against the rank count.
 
-    python bench/large_run.py                 # dx 0.0009: about 25 minutes, 12 GB at 1 rank
-    python bench/large_run.py --dx 0.004      # a rehearsal at 0.5M particles (a minute)
-    python bench/large_run.py --plot-only
+    python bench/performance/large_run.py                 # dx 0.0009: ~25 min, 12 GB at 1 rank
+    python bench/performance/large_run.py --dx 0.004      # a rehearsal at 0.5M particles (a minute)
+    python bench/performance/large_run.py --plot-only
 
 Each case is one `mpirun -n R python -m psph run collapse_dry`; its summary.json gives the
 set-up seconds, the seconds per step of the time loop (the snapshot and checkpoint writes
@@ -26,7 +26,7 @@ import time
 from datetime import date
 from pathlib import Path
 
-ROOT = Path(__file__).parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "bench" / "out"
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
            "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
@@ -35,7 +35,6 @@ STEPS = 100
 
 
 def solid_dt(dx: float) -> float:
-    sys.path.insert(0, str(ROOT))
     from psph.config.load import load_scene
     from psph.solver.stepping import time_stepping
 
@@ -128,7 +127,8 @@ def plot(rows: list[dict]) -> Path:
         a.set_xticks(ranks)
         a.grid(True, alpha=0.3)
         a.legend()
-    fig.suptitle(f"bench/large_run.py, dry collapse, {sel[0]['particles']:,} particles, "
+    fig.suptitle(f"bench/performance/large_run.py, dry collapse, {sel[0]['particles']:,} "
+                 "particles, "
                  f"{date.today()}, {platform.node()}")
     fig.tight_layout()
     path = OUT / "large_run.png"

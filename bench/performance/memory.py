@@ -2,10 +2,10 @@
 (issue 15): the dry collapse at several dx, one step, one snapshot and one checkpoint, on
 1, 2 and 4 ranks (4 oversubscribed on a 2-core machine).
 
-    python bench/memory.py            # dx 0.004, 0.0028, 0.002 (0.5M, 1M, 2M particles)
-    python bench/memory.py --quick    # dx 0.01, 0.007 on 1 and 2 ranks (a minute)
-    python bench/memory.py --dx 0.0009   # 9.9M particles on 1, 2, 4 ranks (5 min, 6.4 GB)
-    python bench/memory.py --plot-only
+    python bench/performance/memory.py            # dx 0.004, 0.0028, 0.002 (0.5M, 1M, 2M particles)
+    python bench/performance/memory.py --quick    # dx 0.01, 0.007 on 1 and 2 ranks (a minute)
+    python bench/performance/memory.py --dx 0.0009   # 9.9M particles, 1, 2, 4 ranks (5 min, 6.4 GB)
+    python bench/performance/memory.py --plot-only
 
 Each case is one `mpirun -n R python -m psph run collapse_dry --set particles.dx=DX` with
 `time.end` one step long; its `summary.json` gives the peak resident memory of every rank
@@ -26,7 +26,7 @@ import sys
 from datetime import date
 from pathlib import Path
 
-ROOT = Path(__file__).parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "bench" / "out"
 FULL = {"dx": (0.004, 0.0028, 0.002), "ranks": (1, 2, 4)}
 QUICK = {"dx": (0.01, 0.007), "ranks": (1, 2)}
@@ -85,7 +85,7 @@ def plot(rows: list[dict], name: str = "memory") -> Path:
     for a in ax:
         a.grid(True, which="both", alpha=0.3)
         a.legend()
-    fig.suptitle(f"bench/memory.py, dry collapse, {date.today()}, {platform.node()}")
+    fig.suptitle(f"bench/performance/memory.py, dry collapse, {date.today()}, {platform.node()}")
     fig.tight_layout()
     path = OUT / f"{name}.png"
     fig.savefig(path, dpi=110)

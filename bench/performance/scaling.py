@@ -1,9 +1,9 @@
 """Strong scaling 1 -> 2 ranks at N ~ 20k, 100k, 400k, and weak scaling (50k per rank),
 of the coupled elastic TPI step (the throughput bench's block, slabs along its long side).
 
-    python bench/scaling.py            # drives `mpirun -n R python bench/scaling.py --worker`
-    python bench/scaling.py --quick    # fewer steps, for a smoke check
-    python bench/scaling.py --plot-only
+    python bench/performance/scaling.py            # drives `mpirun -n R python <this> --worker`
+    python bench/performance/scaling.py --quick    # fewer steps, for a smoke check
+    python bench/performance/scaling.py --plot-only
 
 Each worker times `steps` bare steps (after warm-up) three times and keeps the fastest
 window, with a barrier around each window; per-stage seconds come from the pipeline's own
@@ -23,10 +23,9 @@ import tomllib
 from datetime import date
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-from throughput import BLOCK  # noqa: E402  (the same scene as the throughput bench)
+from throughput import BLOCK  # (the same scene as the throughput bench)
 
-OUT = Path(__file__).parent / "out"
+OUT = Path(__file__).resolve().parents[1] / "out"
 # (width, height) m at dx = 0.01 -> N = w * h * 1e4; steps per timed window
 SIZES = {20_000: (1.0, 2.0, 400), 50_000: (1.0, 5.0, 160), 100_000: (2.0, 5.0, 80),
          400_000: (4.0, 10.0, 20)}

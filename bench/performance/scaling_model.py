@@ -27,8 +27,8 @@ the halo width 2h (`slab_cuts`), which caps P. Cluster network: the measured lat
 bandwidth of this machine (shared memory) and, as stated assumptions, an InfiniBand-class
 interconnect (alpha = 2 us, beta = 10 GB/s, alpha_c = 3 us per tree level).
 
-    .venv/bin/python bench/scaling_model.py            # measures (about 75 s), then models
-    .venv/bin/python bench/scaling_model.py --model-only   # from bench/out/scaling_model.json
+    python bench/performance/scaling_model.py            # measures (about 75 s), then models
+    python bench/performance/scaling_model.py --model-only   # from bench/out/scaling_model.json
 
 Prints the tables, writes bench/out/scaling_model.json and bench/out/scaling_model.png.
 """
@@ -45,11 +45,10 @@ import tomllib
 from datetime import date
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-from scaling import timed_windows  # noqa: E402
-from throughput import BLOCK  # noqa: E402
+from scaling import timed_windows
+from throughput import BLOCK
 
-OUT = Path(__file__).parent / "out"
+OUT = Path(__file__).resolve().parents[1] / "out"
 N_CHECK = (20_000, 100_000, 400_000)
 SIZES = {20_000: (1.0, 2.0, 200), 100_000: (2.0, 5.0, 40), 400_000: (4.0, 10.0, 10)}
 ASPECT = 10.0  # L / H of the modelled section

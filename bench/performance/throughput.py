@@ -1,10 +1,10 @@
 """Throughput of the coupled elastic step (TPI), and steps/s of the Terzaghi column.
 
 Run under mpirun with the rank count to measure, e.g.
-    mpirun -n 1 .venv/bin/python bench/throughput.py
-    mpirun -n 2 .venv/bin/python bench/throughput.py
+    mpirun -n 1 .venv/bin/python bench/performance/throughput.py
+    mpirun -n 2 .venv/bin/python bench/performance/throughput.py
 Each run prints a table and writes bench/out/throughput-<ranks>rank.json; then
-`python bench/throughput.py --plot` draws bench/out/throughput.png from all JSON files.
+`python bench/performance/throughput.py --plot` draws bench/out/throughput.png from all JSON files.
 Particle-steps per second per core = particles * steps / loop wall time / ranks.
 
 The column is the `terzaghi` scene under TPI from t = 0 with its top drained from t = 0 (a
@@ -23,7 +23,7 @@ import tomllib
 from datetime import date
 from pathlib import Path
 
-OUT = Path(__file__).parent / "out"
+OUT = Path(__file__).resolve().parents[1] / "out"
 
 BLOCK = """
 name = "throughput_{n}"

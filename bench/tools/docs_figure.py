@@ -1,6 +1,6 @@
 """Copy a bench or `psph plot` picture into docs/ at the README's width.
 
-    .venv/bin/python bench/docs_figure.py SRC DST [--width 1000]
+    python bench/tools/docs_figure.py SRC DST [--width 1000]
 
 The README's pictures are these copies (e.g. `bench/out/convergence-slope.png` ->
 `docs/convergence_slope.png`): resized with Lanczos to `--width` pixels, the aspect

@@ -9,8 +9,8 @@ still processed". The frames show the excess pore pressure over the phreatic lin
 p itself, the paper's "negative pore-water pressure (i.e., equal to excess pore-water
 pressure in this case)".
 
-    python bench/collapse_beta.py            # runs both on 2 ranks to 1.2 s (~5-7 min)
-    python bench/collapse_beta.py --plot-only
+    python bench/verification/collapse_beta.py            # runs both on 2 ranks to 1.2 s (~5-7 min)
+    python bench/verification/collapse_beta.py --plot-only
 
 Prints the suction table, writes bench/out/collapse_beta.json and
 bench/out/collapse_beta.png. A run that fails (exit 3) is drawn up to its last snapshot.
@@ -27,14 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
-from psph.analysis.plot import excess_label, excess_of  # noqa: E402
-from psph.config.load import load_scene  # noqa: E402
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.verify.pressure import PHREATIC_ROWS, suction_integral, wet_threshold  # noqa: E402
+from psph.analysis.plot import excess_label, excess_of
+from psph.config.load import load_scene
+from psph.io.snapshots import read_snapshots
+from psph.verify.pressure import PHREATIC_ROWS, suction_integral, wet_threshold
 
-OUT = Path(__file__).parent / "out"
+ROOT = Path(__file__).resolve().parents[2]
+
+OUT = Path(__file__).resolve().parents[1] / "out"
 CASES = {"Eq. (47) on, beta = 0.04": 0.04, "Eq. (47) off, beta = 0": 0.0}
 # Fig. 15's frames, after one at the peak of the suction without Eq. (47)
 END, TIMES = 1.2, [0.15, 0.3, 0.6, 1.2]

@@ -2,7 +2,7 @@
 
     make scene-collapse_saturated_psi-5 scene-collapse_saturated_psi0 \
          scene-collapse_saturated_psi2.5
-    .venv/bin/python bench/collapse_table.py            # reads runs/collapse_saturated_*
+    python bench/verification/collapse_table.py            # reads runs/collapse_saturated_*
 
 For each dilatancy angle: the run-out at 0.6 s and at the end, the largest and the most
 negative excess pore pressure over all snapshots and the highest 99th percentile of
@@ -15,18 +15,16 @@ excess) and the suction max(-p, 0). Writes bench/out/collapse_table.json.
 """
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
-
-from psph.config.load import run_scene  # noqa: E402
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.verify.collapse import collapse_metrics  # noqa: E402
+from psph.config.load import run_scene
+from psph.io.snapshots import read_snapshots
+from psph.verify.collapse import collapse_metrics
 from psph.verify.pressure import excess_pressure, phreatic_excess, pressure_quality
+
+ROOT = Path(__file__).resolve().parents[2]
 
 CASES = {"-5": "collapse_saturated_psi-5", "0": "collapse_saturated_psi0",
          "2.5": "collapse_saturated_psi2.5"}

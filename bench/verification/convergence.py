@@ -32,12 +32,12 @@ keep their sign (else no order: the series is not in its asymptotic range). A ca
 error is its distance to the reference of its scene, scheme and law: the dx-extrapolated
 run-out at the smallest dt fraction that has one, else the finest run.
 
-    .venv/bin/python bench/convergence.py --quick      # CI-sized (a 1 x 0.5 m dry column)
-    .venv/bin/python bench/convergence.py              # the full matrix (hours on 2 cores)
-    .venv/bin/python bench/convergence.py --only 'psi0 tpi .* dt=1'   # a subset (regex)
-    .venv/bin/python bench/convergence.py --only 'k0_0.5'   # the slope pairs
-    .venv/bin/python bench/convergence.py --table-only # table and PNG from the JSON
-    .venv/bin/python bench/convergence.py --table-only \
+    python bench/verification/convergence.py --quick      # CI-sized (a 1 x 0.5 m dry column)
+    python bench/verification/convergence.py              # the full matrix (hours on 2 cores)
+    python bench/verification/convergence.py --only 'psi0 tpi .* dt=1'   # a subset (regex)
+    python bench/verification/convergence.py --only 'k0_0.5'   # the slope pairs
+    python bench/verification/convergence.py --table-only # table and PNG from the JSON
+    python bench/verification/convergence.py --table-only \
         --adopt 'retrogressive_k0_0.5 scene local dx=0.4 dt=1' runs/k05_cutoff
         # a case from a finished run of the case's scene (scene.toml value for value but
         # description, checkpoint and output; other snapshot times: last-snapshot metrics)
@@ -61,11 +61,10 @@ import time
 from datetime import date
 from pathlib import Path
 
-ROOT = Path(__file__).parent.parent
-OUT = Path(__file__).parent / "out"
-sys.path.insert(0, str(ROOT))
+from psph.verify.convergence import series
 
-from psph.verify.convergence import series  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
+OUT = Path(__file__).resolve().parents[1] / "out"
 
 DX = (0.04, 0.04 / math.sqrt(2.0), 0.02)
 FRACTIONS = (1.0, 0.5, 0.25)
@@ -78,7 +77,7 @@ SLOPE_L_C = 1.2
 SLOPE_DX = (0.4, 0.4 * math.sqrt(2.0))
 # the slope's laws: besides the default over-non-local average (m = 2), the plain one
 # (m = 1), which softens a band on the fixed base alike at both spacings (README, "The
-# cause of the pair's disagreement"; bench/nonlocal_sliding.py)
+# cause of the pair's disagreement"; bench/diagnostics/nonlocal_sliding.py)
 SLOPE_LAWS = ("local", "regularised", "regularised-m1")
 
 

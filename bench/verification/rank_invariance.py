@@ -1,8 +1,8 @@
 """The same scenes on 1, 2, 3 and 4 ranks (oversubscribed where cores are fewer) give the
 same particles: every snapshot is compared field by field with the 1-rank run.
 
-    python bench/rank_invariance.py           # both scenes, ranks 1 2 3 4
-    python bench/rank_invariance.py --ranks 1 2 3
+    python bench/verification/rank_invariance.py           # both scenes, ranks 1 2 3 4
+    python bench/verification/rank_invariance.py --ranks 1 2 3
 
 Scenes: the consolidation column (coupled, explicit loading then TPI, Shepard filter and
 Eq. (47) on) and a dry block falling through every slab onto the floor (migration to
@@ -22,15 +22,55 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from tests.helpers import falling_far  # noqa: E402
+from psph.io.snapshots import read_snapshots
 
-OUT = Path(__file__).parent / "out"
+ROOT = Path(__file__).resolve().parents[2]
+
+OUT = Path(__file__).resolve().parents[1] / "out"
 FIELDS = ("x", "u", "v", "p", "n", "stress")
 COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification.tv=[]",
           "output.times=[0.005,0.012]", "stabilisation.shepard_every=7", "pressure.beta=0.04"]
+
+
+# the scene of tests/helpers.py: falling_far
+FALLING_BLOCK = """
+name = "falling_far"
+description = "a dry elastic block falls through the whole slab layout onto the floor"
+gravity = [0.0, -9.81]
+[domain]
+min = [0.0, 0.0]
+max = [0.3, 2.0]
+[particles]
+dx = 0.01
+[[particles.blocks]]
+min = [0.0, 0.7]
+max = [0.3, 1.3]
+[material]
+E = 5.0e6
+nu = 0.3
+porosity = 0.4
+rho_s = 2000.0
+k = 1.0e-3
+[boundaries]
+left = { motion = "slip" }
+right = { motion = "slip" }
+bottom = { motion = "fixed" }
+[pressure]
+scheme = "none"
+[time]
+end = 0.4
+[output]
+interval = 0.05
+"""
+
+
+def falling_far(tmp: Path) -> Path:
+    """A dry block that falls through the whole slab layout: on 2 ranks every particle
+    ends below the first cut (migration), and the upper rank runs empty unless the slabs
+    are recut (load imbalance)."""
+    f = tmp / "falling_far.toml"
+    f.write_text(FALLING_BLOCK)
+    return f
 
 
 def run_case(scene: str, sets: list[str], ranks: int, out: Path) -> dict:

@@ -1,7 +1,7 @@
 """Pore pressure through the retrogressive failure (Section 4.5, Fig. 20 and 24) from
 finished runs: the checks of issue 13.
 
-    .venv/bin/python bench/retrogressive_pressure.py bench/out/field_retrogressive_k0_0.5 \
+    python bench/verification/retrogressive_pressure.py bench/out/field_retrogressive_k0_0.5 \
         bench/out/field_retrogressive_k0_1.5
 
 For each run directory:
@@ -42,13 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).parent.parent
-sys.path.insert(0, str(ROOT))
-
-from psph.config.load import run_scene  # noqa: E402
-from psph.io.snapshots import read_snapshots  # noqa: E402
-from psph.verify.collapse import slide_history  # noqa: E402
+from psph.config.load import run_scene
+from psph.io.snapshots import read_snapshots
+from psph.verify.collapse import slide_history
 from psph.verify.pressure import DEBRIS_DX, excess_pressure, ground_surface, mean_effective_stress
+
+ROOT = Path(__file__).resolve().parents[2]
 
 BAND_EPS = 0.05  # equivalent plastic strain of the shear zone
 BASE_ZONE_M = 4.0  # the basal shear zone starts in the bottom 4 m

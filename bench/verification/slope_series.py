@@ -1,7 +1,7 @@
 """Run-out and back scarp against time of finished slope runs, side by side (issue 17):
 `metrics.collapse.series` and the slides of each run's `summary.json`.
 
-    .venv/bin/python bench/slope_series.py OUT1 OUT2 ... [--every 5] [--png PATH]
+    python bench/verification/slope_series.py OUT1 OUT2 ... [--every 5] [--png PATH]
 
 Prints the table (the snapshot times every `--every` seconds that all runs reached, and
 each run's slide times), draws run-out and back scarp against time (default
@@ -25,7 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs", nargs="+", type=Path)
     ap.add_argument("--every", type=float, default=5.0, help="table rows every ... s")
-    ap.add_argument("--png", type=Path, default=Path(__file__).parent / "out" /
+    ap.add_argument("--png", type=Path, default=Path(__file__).resolve().parents[1] / "out" /
                     "slope_series.png")
     args = ap.parse_args(argv)
     runs = [load(r) for r in args.runs]

@@ -11,9 +11,9 @@ second difference of p at the column base, last quarter vs first quarter, > 3x a
 Long run: the same column with the `terzaghi` settings (alpha = 0.5, dt = 5e-6 s) for
 10x the usual duration (T_v = 10); kinetic energy and p_max must stay bounded.
 
-    .venv/bin/python bench/stability.py          # ~10 min on this machine
-    .venv/bin/python bench/stability.py --plot-only
-    .venv/bin/python bench/stability.py --projection   # the R row with the projection
+    python bench/verification/stability.py          # ~10 min on this machine
+    python bench/verification/stability.py --plot-only
+    python bench/verification/stability.py --projection   # the R row with the projection
 
 Writes bench/out/stability.json and bench/out/stability.png.
 """
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-OUT = Path(__file__).parent / "out"
+OUT = Path(__file__).resolve().parents[1] / "out"
 Q = 1.0e4
 DT = 1.0e-5
 N_TPI = 20000

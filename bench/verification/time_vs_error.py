@@ -11,11 +11,12 @@ sweeps dt from R = 8.8 to four times the solid cap Eq. (41) at CG tolerances 1e-
 against the analytical solution: max |p - p_a| / q over T_v = 0.1, 0.2, 0.5, and the max
 settlement error / final settlement over T_v in [0.1, 0.5].
 
-    .venv/bin/python bench/time_vs_error.py            # the paper's column (~100 CPU min)
-    .venv/bin/python bench/time_vs_error.py --jobs 2   # the same on two cores (~55 min)
-    .venv/bin/python bench/time_vs_error.py --quick    # dx = 0.02, k = 8e-4 column (~3 min)
-    .venv/bin/python bench/time_vs_error.py --geotaichi  # GeoTaichi's start (~5 min)
-    .venv/bin/python bench/time_vs_error.py --jobs 2 --only 'explicit|alpha=0.7|projection dt=1.2'
+    python bench/verification/time_vs_error.py            # the paper's column (~100 CPU min)
+    python bench/verification/time_vs_error.py --jobs 2   # the same on two cores (~55 min)
+    python bench/verification/time_vs_error.py --quick    # dx = 0.02, k = 8e-4 column (~3 min)
+    python bench/verification/time_vs_error.py --geotaichi  # GeoTaichi's start (~5 min)
+    python bench/verification/time_vs_error.py --jobs 2 \
+        --only 'explicit|alpha=0.7|projection dt=1.2'
         # a subset in one run (labels matching the regular expression; writes *-only.*)
 
 `--geotaichi`: the `terzaghi_undrained` scene (H = 1 m, q = 10 kPa, k = 2e-4, dx = 0.02 m,
@@ -36,7 +37,7 @@ import time
 from datetime import date
 from pathlib import Path
 
-OUT = Path(__file__).parent / "out"
+OUT = Path(__file__).resolve().parents[1] / "out"
 BASE = ["verification.tv=[0.1, 0.2, 0.5]", "output.interval=0.0", "output.times=[]"]
 QUICK = ["particles.dx=0.02", "material.k=8e-4"]
 BAR = 0.03  # error bar of the headline: TPI speed-up at <= 3 % error

@@ -8,9 +8,9 @@ rho k / gamma_l (measured, not derived; every dt here is below the solid limit E
 of the column, 6.9e-5 s). A run is stable if it reaches `--end` (default 0.3 s) without a
 numerical failure.
 
-    python bench/tpi_gravity.py            # table, bench/out/tpi_gravity.json and .png
-    python bench/tpi_gravity.py --plot-only
-    python bench/tpi_gravity.py --no-gravity   # the loaded Terzaghi column instead
+    python bench/verification/tpi_gravity.py            # table, bench/out/tpi_gravity.json and .png
+    python bench/verification/tpi_gravity.py --plot-only
+    python bench/verification/tpi_gravity.py --no-gravity   # the loaded Terzaghi column instead
 
 `--projection`: the same geostatic column with `pressure.scheme = "projection"` (the
 symplectic step) at every dt of the map (k = 2e-4, G = 0.2 ... 1.2) and at the solid
@@ -35,8 +35,8 @@ import numpy as np
 
 from psph.physics.limits import tpi_gain_limit
 
-OUT = Path(__file__).parent / "out"
-ROOT = Path(__file__).parent.parent
+OUT = Path(__file__).resolve().parents[1] / "out"
+ROOT = Path(__file__).resolve().parents[2]
 ALPHAS = (0.0, 0.3, 0.5, 0.7)
 GAINS = (0.2, 0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.8, 0.9, 1.0, 1.1, 1.2)
 GAMMA, RHO = 9810.0, 0.65 * 2650.0 + 0.35 * 1000.0
