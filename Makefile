@@ -22,7 +22,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
-.PHONY: env run test test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
+.PHONY: env run test layers test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
 	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-eq47-step bench-field \
 	bench-field-window bench-large bench-convergence bench-convergence-quick lint clean-env \
 	docs docs-check
@@ -54,7 +54,11 @@ scene-%: env
 	mpirun -n $(NP) $(VPY) -m psph run $* --out runs/$*
 	$(VPY) -m psph plot runs/$*
 
-test: test-serial test-mpi
+# the import layers of pyproject.toml [tool.importlinter] first: seconds, before the suites
+test: layers test-serial test-mpi
+
+layers: env
+	$(VENV)/bin/lint-imports
 
 test-serial: env
 	$(VPY) -m pytest -q
@@ -63,58 +67,58 @@ test-mpi: env
 	mpirun -n 2 $(VPY) -m pytest -q --with-mpi -m mpi -p no:cacheprovider tests
 
 bench: env
-	mpirun -n 1 $(VPY) bench/throughput.py
-	mpirun -n 2 $(VPY) bench/throughput.py
-	$(VPY) bench/throughput.py --plot
+	mpirun -n 1 $(VPY) bench/performance/throughput.py
+	mpirun -n 2 $(VPY) bench/performance/throughput.py
+	$(VPY) bench/performance/throughput.py --plot
 
 bench-time-vs-error: env
-	$(VPY) bench/time_vs_error.py
+	$(VPY) bench/verification/time_vs_error.py
 
 bench-stability: env
-	$(VPY) bench/stability.py
+	$(VPY) bench/verification/stability.py
 
 # peak memory and set-up time per rank, 0.5M-2M particles on 1, 2 and 4 ranks (issue 15)
 bench-memory: env
-	$(VPY) bench/memory.py
+	$(VPY) bench/performance/memory.py
 
 # ~10M particles on 2 ranks: 100 steps, snapshot, checkpoint, restart; set-up on 1, 2, 4
 bench-large: env
-	$(VPY) bench/large_run.py
+	$(VPY) bench/performance/large_run.py
 
 # strong (20k, 100k, 400k) and weak scaling 1 -> 2 ranks
 bench-scaling: env
-	$(VPY) bench/scaling.py
+	$(VPY) bench/performance/scaling.py
 
 # TPI stability of a column at rest under gravity, over alpha and dt gamma_l / (rho k)
 bench-tpi-gravity: env
-	$(VPY) bench/tpi_gravity.py
+	$(VPY) bench/verification/tpi_gravity.py
 
 # the dilative saturated collapse with and without Eq. (47), side by side (Fig. 16)
 bench-collapse-beta: env
-	$(VPY) bench/collapse_beta.py
+	$(VPY) bench/verification/collapse_beta.py
 
 # the saturated collapse's first 10 ms at two steps: Eq. (47), beta = 0, alpha = 0, projection
 bench-eq47-step: env
-	$(VPY) bench/eq47_step.py
+	$(VPY) bench/diagnostics/eq47_step.py
 
 # Section 4.5 clay slope on 2 ranks: the full 40 s (about 25 min) or a 0.5 s window
 bench-field: env
-	$(VPY) bench/field.py
+	$(VPY) bench/performance/field.py
 
 bench-field-window: env
-	$(VPY) bench/field.py --window 0.5
+	$(VPY) bench/performance/field.py --window 0.5
 
 # run-out against dx and dt, local and regularised softening (issue 17): the full matrix
 # (hours on 2 cores; ARGS="--only REGEX" for a subset) or the CI-sized dry column (~3 min)
 bench-convergence: env
-	$(VPY) bench/convergence.py $(ARGS)
+	$(VPY) bench/verification/convergence.py $(ARGS)
 
 bench-convergence-quick: env
-	$(VPY) bench/convergence.py --quick
+	$(VPY) bench/verification/convergence.py --quick
 
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env
-	$(VPY) bench/rank_invariance.py
+	$(VPY) bench/verification/rank_invariance.py
 
 # the documentation site (Sphinx + MyST) into docs/_build/html: any warning fails, internal
 # links included; docs/reference/scene_keys.md is generated from the scene schema
@@ -127,6 +131,7 @@ docs-check: env
 
 lint: env
 	$(VENV)/bin/ruff check psph tests bench
+	$(VENV)/bin/lint-imports
 
 clean-env:
 	rm -rf $(VENV)

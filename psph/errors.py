@@ -9,7 +9,7 @@ class SceneError(Exception):
 
 class SceneRule(ValueError):
     """Raised inside a scene model's validator: the key, the value and the rule that
-    `psph.scene.validate` turns into one SceneError line."""
+    `psph.config.load.validate` turns into one SceneError line."""
 
     def __init__(self, key: str, value, rule: str):
         super().__init__(rule)

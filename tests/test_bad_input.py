@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from psph.scene import builtin_dir
+from psph.config.load import builtin_dir
 from tests.helpers import assert_bad_input
 
 TERZAGHI = (builtin_dir() / "terzaghi_tpi.toml").read_text()
@@ -94,7 +94,8 @@ def test_bad_value_exit_2_one_line_nothing_written(tmp_path, args, words):
 def test_tpi_bound_can_be_overridden_explicitly():
     """The TPI bound is a measured one: a scene may step past it on purpose (the
     stability benches do) with pressure.allow_unstable."""
-    from psph.scene import load_scene, tpi_gain, tpi_gain_limit
+    from psph.config.load import load_scene
+    from psph.physics.limits import tpi_gain, tpi_gain_limit
 
     over = ["material.k=5e-5", "time.dt=1.2e-5", "pressure.allow_unstable=true"]
     scene = load_scene("terzaghi_tpi", over)

@@ -1,4 +1,4 @@
-"""Rigid polyline boundaries lined with boundary particles (issue 16, psph/boundary.py):
+"""Rigid polyline boundaries lined with boundary particles (issue 16, psph/solver/boundary.py):
 geometry of the rows, the Adami-type state, no penetration, Coulomb friction on both sides
 of the threshold, a hydrostatic column in a V-shaped valley, and bad input."""
 
@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
+from psph.config.load import load_scene
+from psph.geometry.polylines import _nearest_on_polyline, boundary_particles
 from psph.io.snapshots import read_snapshots
 from psph.kernels.boundary import MOTION_FIXED, boundary_state
 from psph.kernels.neighbours import cell_lists
-from psph.scene import load_scene
-from psph.scenes.polylines import _nearest_on_polyline, boundary_particles
 from tests.helpers import assert_bad_input
 from tests.test_bad_input import run_cli
 
@@ -74,7 +74,7 @@ def _distance_to_incline(x):
 def _run(scene_file, tmp_path, *sets):
     from mpi4py import MPI
 
-    from psph.run import run
+    from psph.app.run import run
 
     out = tmp_path / "out"
     run(load_scene(str(scene_file), list(sets)), out, comm=MPI.COMM_SELF, quiet=True)
@@ -113,7 +113,7 @@ def test_rows_fill_the_kernel_support_on_the_non_soil_side(soil):
 def test_a_wall_from_a_csv_file_with_the_soil_on_its_left(tmp_path):
     """A retaining wall x(z) given as CSV rows (z increasing), soil = "left": three rows
     (h = 1.3 dx) to its right, normals pointing to smaller x."""
-    from psph.scene_boundaries import Polyline, points_of
+    from psph.config.boundaries import Polyline, points_of
 
     f = tmp_path / "wall.csv"
     f.write_text("x, z\n0.5, 0.0\n0.5, 0.4\n")
@@ -384,7 +384,7 @@ def test_a_line_sampled_finer_than_dx_gets_no_more_boundary_particles():
     """A survey line with points closer than dx: the stations are spaced about dx along
     the whole line (3 rows x 20 stations for 10 m at dx 0.5, as one segment or 100), and
     a bend sampled at 201 points gets what its 3-point form gets."""
-    from psph.scenes.polylines import boundary_particles
+    from psph.geometry.polylines import boundary_particles
 
     counts = set()
     for nseg in (1, 10, 100):

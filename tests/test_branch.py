@@ -1,7 +1,7 @@
 """`python -m psph.io.branch`: a checkpoint copied with scene overrides continues under the
 new physics, which a plain restart refuses (exit 2)."""
 
-from psph import cli
+from psph.app import cli
 from psph.io.branch import main as branch
 
 RUN = ["--set", "time.end=3e-4", "--quiet"]

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
-from psph.run import run
-from psph.scene import load_scene
 
 
 @pytest.fixture(scope="module")

@@ -6,9 +6,9 @@ Nothing turns NaN. The full runs to 1.2 s are in the README."""
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
-from psph.run import run
-from psph.scene import load_scene
 from psph.verify.collapse import collapse_metrics
 from tests.helpers import shared_tmp
 

@@ -1,5 +1,5 @@
 """Observed order and Richardson extrapolation (psph/verify/convergence.py), used by
-bench/convergence.py (issue 17): exact on a metric that converges as a power of the
+bench/verification/convergence.py (issue 17): exact on a metric that converges as a power of the
 spacing, no order where the differences change sign."""
 
 import math

@@ -79,9 +79,9 @@ def test_collapse_verification_on_two_ranks_equals_one_process(tmp_path_factory)
     slides, every snapshot's pressure quality) read in shares on 2 ranks equals the
     one-process block: exactly, but the checkerboard indices (their sums in another
     order) to a relative 1e-12."""
-    from psph.run import run
-    from psph.scene import load_scene
-    from psph.verify import collapse_verification
+    from psph.app.run import run
+    from psph.config.load import load_scene
+    from psph.verify.collapse import collapse_verification
     from tests.helpers import shared_tmp
 
     comm = MPI.COMM_WORLD

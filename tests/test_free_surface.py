@@ -14,9 +14,9 @@ window below: porosity 0.3498-0.3538 (initially 0.35), p >= -7.7 kPa.
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
-from psph.run import run
-from psph.scene import load_scene
 
 
 def test_dilative_collapse_without_eq47_keeps_its_toe(tmp_path):

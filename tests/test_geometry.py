@@ -8,8 +8,8 @@ import meshio
 import numpy as np
 import pytest
 
+from psph.config.load import load_scene
 from psph.physics.initial import soil_positions
-from psph.scene import load_scene
 
 SLOPE = [[0.0, 0.0], [3.0, 0.0], [3.0, 0.5], [2.0, 0.5], [1.0, 1.0], [0.0, 1.0]]
 

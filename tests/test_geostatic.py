@@ -5,10 +5,10 @@ sigma'_h / sigma'_v = K0, and p stays hydrostatic."""
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
 from psph.physics.initial import initial_particles
-from psph.run import run
-from psph.scene import load_scene
 
 
 def test_initial_state_is_k0_and_hydrostatic():
@@ -65,11 +65,11 @@ def test_k0_state_balances_gravity_at_the_fixed_bottom():
     fixed bottom's ghosts continue the wall-normal total stress with its weight
     (psph/kernels/ghosts.py); with sigma' mirrored the bottom row sank at 2.7 m/s^2 and the
     column settled into the odd-even mode of sigma' (1.5 % of the base stress; issue 16,
-    bench/issue16/oddeven_experiment.py)."""
+    bench/diagnostics/oddeven_stress_mode.py)."""
     from mpi4py import MPI
 
-    from psph.run import make_slabs
-    from psph.solver import Simulation
+    from psph.app.run import make_slabs
+    from psph.solver.simulation import Simulation
 
     scene = load_scene("geostatic_column")
     sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))

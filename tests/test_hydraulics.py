@@ -3,9 +3,9 @@ drained p = 0) on the free surface (Section 4.4), through one or a few coupled s
 
 import numpy as np
 
-from psph.run import make_slabs
-from psph.scene import load_scene
-from psph.solver import Simulation
+from psph.app.run import make_slabs
+from psph.config.load import load_scene
+from psph.solver.simulation import Simulation
 
 
 def _sim(overrides):

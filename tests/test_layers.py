@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
+from psph.config.load import load_scene
 from psph.physics.initial import soil_positions
-from psph.scene import load_scene
 from tests.helpers import assert_bad_input
 
 SCENE = """

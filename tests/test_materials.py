@@ -8,10 +8,10 @@ import sys
 import numpy as np
 import pytest
 
+from psph.app.run import make_slabs, run
+from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
 from psph.physics.initial import initial_particles
-from psph.run import make_slabs, run
-from psph.scene import load_scene
 from tests.helpers import assert_bad_input
 
 G = 9.81
@@ -99,7 +99,7 @@ def test_sources_take_their_material_and_fluid_constants(tmp_path):
     assert np.allclose(d["rho"], np.where(y > 1.0, _mixture(LIGHT), _mixture(DENSE)))
     assert np.array_equal(d["poro"], np.where(y > 1.0, 0.5, 0.35))
     # the written scene keeps [[materials]] and no [material]
-    from psph.scene import to_toml
+    from psph.config.load import to_toml
 
     text = to_toml(scene)
     assert "[[materials]]" in text and "\n[material]" not in text
@@ -142,7 +142,7 @@ def test_layered_column_stays_at_its_overburden(tmp_path):
     of the top row (0.31 % in a column of one density). The fixed bottom excited the mode
     too, 2.3 % raw here and 1.5 % in a column of one density, while its ghosts mirrored
     sigma'; they now continue the total stress with its weight (psph/kernels/ghosts.py;
-    bench/issue16/oddeven_experiment.py, one variant per candidate exciter)."""
+    bench/diagnostics/oddeven_stress_mode.py, one variant per candidate exciter)."""
     from mpi4py import MPI
 
     scene = load_scene(str(_write(tmp_path, LAYERED)))
@@ -210,7 +210,7 @@ def _one_step(tmp_path, right, rate=1.0e-2):
     Returns (x, material, stress, eps_p, dt) of the particles at least 3 h inside."""
     from mpi4py import MPI
 
-    from psph.solver import Simulation
+    from psph.solver.simulation import Simulation
 
     scene = load_scene(str(_write(tmp_path, STRAIN.format(right=right), f"{right}.toml")))
     sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))

@@ -17,7 +17,7 @@ quality's reads and halo (`psph/verify/distributed.py`) are not under this bound
 hold this rank's share and a 2h halo by construction (tests/test_distributed_metrics.py).
 What this cannot see: an array of a few bytes per global particle (a float64 mask is
 8 B, under 1 % of the slope); those are ruled out by construction
-(psph/decomposition/census.py, psph/scenes/lattice.py, psph/io/checkpoint.py) and by
+(psph/decomposition/census.py, psph/geometry/lattice.py, psph/io/checkpoint.py) and by
 tests/test_setup.py.
 """
 

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
-from psph.run import run
-from psph.scene import load_scene
 from tests.helpers import shared_tmp
 
 COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification.tv=[]",
@@ -207,7 +207,7 @@ def test_gravity_loading_and_stress_regularisation_one_vs_two_ranks_bitwise(
     move and shift)."""
     from mpi4py import MPI
 
-    from psph.verify.sliding import block_scene
+    from psph.app.sliding import block_scene
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
@@ -248,9 +248,9 @@ def test_each_rank_seeds_only_its_slab(tmp_path_factory):
 
     from mpi4py import MPI
 
+    from psph.app.run import make_slabs
     from psph.decomposition.slabs import slab_cuts
     from psph.physics.initial import initial_particles
-    from psph.run import make_slabs
     from tests.test_setup import mixed_scene
 
     comm = MPI.COMM_WORLD
@@ -294,7 +294,7 @@ def _synthetic_checkpoint(path: Path, n: int, old: bool) -> None:
     import h5py
 
     from psph.io.checkpoint import FORMAT
-    from psph.particles import FIELDS
+    from psph.state.particles import FIELDS
 
     rng = np.random.default_rng(5)
     keep = np.sort(rng.permutation(n + 10)[:n])
@@ -517,8 +517,8 @@ def test_layered_k0_set_up_one_vs_two_ranks_bitwise(tmp_path_factory, axis):
     the running sums continue from the rank above."""
     from mpi4py import MPI
 
+    from psph.app.run import make_slabs
     from psph.physics.initial import initial_particles
-    from psph.run import make_slabs
     from tests.test_materials import LAYERED
 
     comm = MPI.COMM_WORLD
@@ -543,7 +543,7 @@ def test_polyline_boundaries_one_vs_two_ranks_bitwise(tmp_path_factory):
     """Boundary particles of polylines (issue 16) with the slab cut through them: the V
     column (pore pressure, fixed wall, the cut at the V's tip) and the block sliding on a
     friction incline across the cut. Each rank appends the boundary particles of its slab
-    plus 4h and averages soil from a 4h halo (psph/boundary.py)."""
+    plus 4h and averages soil from a 4h halo (psph/solver/boundary.py)."""
     from mpi4py import MPI
 
     from tests.test_boundary_particles import INCLINE, V_COLUMN

@@ -15,11 +15,11 @@ import time
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.errors import Interrupted, NumericalError
 from psph.io.checkpoint import read_checkpoint
 from psph.io.snapshots import read_snapshots
-from psph.run import run
-from psph.scene import load_scene
 from tests.helpers import compare_runs, falling_far, shared_tmp
 
 COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification.tv=[]",
@@ -208,8 +208,8 @@ def test_nan_on_one_rank_stops_all_ranks_with_exit_3(tmp_path_factory, monkeypat
     """A NaN put into p on rank 1: every rank returns exit code 3, rank 0 prints one line
     naming step, time, particle id, rank and field; snapshots and the checkpoint written
     before the failure stay readable."""
-    from psph import cli
-    from psph.solver import Simulation
+    from psph.app import cli
+    from psph.solver.simulation import Simulation
 
     comm = _world()
     out = shared_tmp(comm, tmp_path_factory)

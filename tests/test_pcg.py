@@ -12,7 +12,7 @@ import pytest
 
 from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, exact_total, local_parts
 from psph.kernels.laplacian import apply_operator, fixed_rhs, operator_diagonal, pair_weights
-from psph.pcg import PCGWork, pcg
+from psph.solver.pcg import PCGWork, pcg
 from tests.helpers import jittered_lattice, sums_for
 
 
@@ -125,7 +125,7 @@ def test_pcg_solves_the_operator_with_imposed_values():
 
 
 def test_compiled_serial_pcg_gives_the_same_bits():
-    """`kernels/pcg_serial.py` (one rank) against `psph.pcg` with the exact dot products
+    """`kernels/pcg_serial.py` (one rank) against `psph.solver.pcg` with the exact dot products
     of one rank: same iterates, iteration count, residual and solution, to the last bit,
     with imposed rows and images' split weights (w_diag != w_off)."""
     from psph.kernels.pcg_serial import pcg_serial

@@ -5,9 +5,9 @@ import json
 
 import pytest
 
-from psph.run import make_slabs, run
-from psph.scene import load_scene
-from psph.solver import Simulation
+from psph.app.run import make_slabs, run
+from psph.config.load import load_scene
+from psph.solver.simulation import Simulation
 
 SMALL = ["particles.dx=0.05", "verification.tv=[]", "time.end=0.002"]
 

@@ -240,9 +240,9 @@ def test_unset_tension_cutoff_returns_the_paper_law_bit_for_bit(trial, eps_p, be
 def test_tension_cutoff_reaches_the_material_table():
     """The scene key lands in the kernels' column: 0 in the slopes that set it, inf (no
     cut-off, the paper's law) in a Drucker-Prager scene without it."""
+    from psph.config.load import load_scene
     from psph.kernels.update import MAT_TENSION
     from psph.physics.material import material_table
-    from psph.scene import load_scene
 
     assert material_table(load_scene("retrogressive_k0_0.5"))[0, MAT_TENSION] == 0.0
     assert material_table(load_scene("collapse_dry"))[0, MAT_TENSION] == math.inf

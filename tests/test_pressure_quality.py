@@ -8,13 +8,13 @@ import h5py
 import numpy as np
 import pytest
 
+from psph.analysis.pressure import main
+from psph.config.load import load_scene, to_toml
 from psph.physics.initial import initial_particles
-from psph.scene import load_scene, to_toml
 from psph.verify.pressure import (
     checkerboard_index,
     excess_pressure,
     hydrostatic_pressure,
-    main,
     mean_effective_stress,
     neighbour_pairs,
     phreatic_excess,
@@ -138,7 +138,7 @@ def test_frames_draw_the_excess_over_the_phreatic_line_behind_a_drained_surface(
     """`psph plot`'s excess: behind a drained free surface (the collapses) the table is
     the current phreatic line, so a face drained to p = 0 shows none; with ponding (the
     slopes) the table is the ground surface, and the same drawdown shows as negative."""
-    from psph.plot import excess_label, excess_of
+    from psph.analysis.plot import excess_label, excess_of
 
     x, _, _ = _lattice(10)
     gamma = 1000.0 * 9.81
@@ -212,7 +212,7 @@ def test_pressure_quality_is_finite_and_serialisable():
 
 
 def test_cli_writes_summary(tmp_path, capsys):
-    """`python -m psph.verify.pressure OUT --write` on a hand-made output directory adds
+    """`python -m psph.analysis.pressure OUT --write` on a hand-made output directory adds
     metrics.pressure_quality and keeps the rest of summary.json; a missing one: exit 2."""
     scene, snaps = _fake_snapshots()
     out = tmp_path / "run"

@@ -17,9 +17,10 @@ to the surface and m0: 0.0176 / 0.0123 / 0.0058.
 import numpy as np
 import pytest
 
-from psph.run import run
-from psph.scene import load_scene
-from psph.solver import Simulation, time_stepping
+from psph.app.run import run
+from psph.config.load import load_scene
+from psph.solver.simulation import Simulation
+from psph.solver.stepping import time_stepping
 
 COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.5]",
           "output.history_interval=2e-4"]
@@ -37,7 +38,7 @@ def test_projection_runs_at_the_solid_limit_with_its_stage(integrator):
     kicks)."""
     from mpi4py import MPI
 
-    from psph.run import make_slabs
+    from psph.app.run import make_slabs
 
     scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + [f"time.integrator='{integrator}'",
                                                           FORCE_EULER])
@@ -89,7 +90,7 @@ def test_undrained_start_is_the_oedometric_undrained_state():
 def test_terzaghi_from_the_undrained_state_to_tv_01(tmp_path):
     """The `terzaghi_undrained` scene (GeoTaichi's start, 100 particles, the projection at
     the solid limit) to T_v = 0.1 (the whole run to T_v = 0.5 is in
-    `bench/time_vs_error.py --geotaichi`); measured 2026-11-30: 0.0026 / 0.0021 of q at
+    `bench/verification/time_vs_error.py --geotaichi`); measured 2026-11-30: 0.0026 / 0.0021 of q at
     T_v = 0.05 / 0.1, settlement of the top row against the reference at its depth within
     0.10 % over that window."""
     scene = load_scene("terzaghi_undrained", ["verification.tv=[0.05, 0.1]"])
@@ -141,7 +142,7 @@ def test_twice_and_four_times_the_solid_limit_have_no_period_two_mode(tmp_path):
     every step and grew until its porosity left (0, 1) at step 25 (exit 3), while the
     operator lacked the correction's self term (`images.image_weights`). With its image
     the loading ramp passes at twice and four times the cap and p stays within its
-    undrained value. (The whole runs are in `bench/time_vs_error.py`.)"""
+    undrained value. (The whole runs are in `bench/verification/time_vs_error.py`.)"""
     for factor in (2, 4):
         scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + [
             f"time.dt={2.4e-5 * factor}", "time.allow_dt_above_solid_limit=true",
@@ -159,7 +160,7 @@ def test_one_sweep_step_records_the_whole_acceleration():
     on every particle (the acceleration term and the snapshots read it)."""
     from mpi4py import MPI
 
-    from psph.run import make_slabs
+    from psph.app.run import make_slabs
 
     scene = load_scene("terzaghi_tpi", COARSE + PROJECTION + ["time.dt=2.4e-5",
                                                           "time.integrator='euler'",

@@ -8,7 +8,7 @@ column it grew at Eq. (41) after 0.4 s and, at half of it, during the undrained 
 (p at 27 q by 0.01 s). After the kick (symplectic) the skeleton is leapfrog and the
 undrained mode damped: it runs at Eq. (41) to the end. So validation refuses the
 one-sweep step with the projection, and the projection's default integrator is the
-symplectic one. The whole map: bench/projection_stability.py.
+symplectic one. The whole map: bench/verification/projection_stability.py.
 """
 
 import subprocess
@@ -17,8 +17,9 @@ import sys
 import numpy as np
 import pytest
 
-from psph.run import run
-from psph.scene import load_scene, solid_dt_limit
+from psph.app.run import run
+from psph.config.load import load_scene
+from psph.physics.limits import solid_dt_limit
 from tests.helpers import assert_bad_input
 
 Q = 1.0e4

@@ -10,8 +10,8 @@ import shutil
 import subprocess
 import sys
 
-from psph.run import run
-from psph.scene import load_scene
+from psph.app.run import run
+from psph.config.load import load_scene
 from tests.helpers import compare_runs, falling_far
 from tests.test_removal import REMOVE
 

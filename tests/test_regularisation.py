@@ -159,7 +159,8 @@ def test_a_band_on_a_wall_softens_with_the_images():
 
 
 def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_with_m_1():
-    """The slope's basal band in seconds (bench/nonlocal_sliding.py): a 9.6 x 4.8 m block
+    """The slope's basal band in seconds (bench/diagnostics/nonlocal_sliding.py):
+    a 9.6 x 4.8 m block
     of the Section 4.5 clay (c 55 -> 0.7 kPa, eta = 5) slides at 10 m/s on a fixed base,
     l_c = 1.2 m at dx = 0.6 and 0.4 m (l_c / dx = 2 and 3). The fixed base's ghosts put
     the slip into the bottom row at any dx, so that row's own eps_p is the largest and
@@ -175,7 +176,7 @@ def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_wit
     The traction is the bottom row's strength at its eps_hat (within 4-15 % with m = 1
     and m = 2): the base slides at the strength the average gives it.
     """
-    from psph.verify.sliding import SLOPE_SOFTENING, sliding_block
+    from psph.app.sliding import SLOPE_SOFTENING, sliding_block
 
     reg = "material.plasticity.regularisation={kind='nonlocal', length=1.2, m=1.0}"
     traction = {}

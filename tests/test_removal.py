@@ -6,10 +6,10 @@ import shutil
 
 import numpy as np
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.io.checkpoint import read_checkpoint
 from psph.io.snapshots import read_snapshots
-from psph.run import run
-from psph.scene import load_scene
 from tests.helpers import compare_runs, falling_far
 
 # the top quarter of the block (a box) and a triangle at its lower right corner

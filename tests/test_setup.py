@@ -9,10 +9,10 @@ import meshio
 import numpy as np
 import pytest
 
+from psph.config.load import load_scene
 from psph.decomposition.slabs import cuts_from_counts, slab_cuts
+from psph.geometry.lattice import census, nearest
 from psph.physics.initial import initial_particles
-from psph.scene import load_scene
-from psph.scenes.lattice import census, nearest
 
 SCENE = """
 name = "mixed"

@@ -56,8 +56,8 @@ def test_eq47_suction_does_not_depend_on_the_step(tmp_path):
     projection 0.4 % (README, "Eq. (47) and the time step")."""
     from mpi4py import MPI
 
-    from psph.run import run
-    from psph.scene import load_scene
+    from psph.app.run import run
+    from psph.config.load import load_scene
 
     sets = ["particles.blocks=[{min=[0.0, 0.0], max=[1.0, 0.5]}]", "domain.max=[4.0, 1.0]",
             "initial.water_table=0.48", "time.end=0.002", "output.interval=0.002"]

@@ -6,10 +6,11 @@ where the one-sweep step diverges."""
 import numpy as np
 import pytest
 
+from psph.app.run import run
+from psph.config.load import load_scene
 from psph.errors import NumericalError
 from psph.kernels.interactions import velocity_gradient_sums
-from psph.run import run
-from psph.scene import load_scene, undrained_dt_limit
+from psph.physics.limits import undrained_dt_limit
 from tests.helpers import sums_for
 
 VELOCITY_COLUMNS = [4, 5, 6, 7, 10, 11, 12, 13, 25, 26, 27, 28]

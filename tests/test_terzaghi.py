@@ -8,9 +8,10 @@ The full column (dx = 0.01, k = 2e-4) runs with `make run`; its errors are in su
 import numpy as np
 import pytest
 
-from psph.run import run
-from psph.scene import fluid_dt_limit, load_scene
-from psph.solver import time_stepping
+from psph.app.run import run
+from psph.config.load import load_scene
+from psph.physics.limits import fluid_dt_limit
+from psph.solver.stepping import time_stepping
 from psph.verify import terzaghi
 
 COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.5]",
@@ -19,7 +20,7 @@ COARSE = ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.1, 0.2, 0.
 
 # the drained switch's window (0.01-0.03 s); the explicit consolidation to T_v = 0.5
 # (776,417 steps, four minutes of the suite) is measured, not asserted, by the "explicit"
-# row of `bench/time_vs_error.py --quick` (README, "Run time against error")
+# row of `bench/verification/time_vs_error.py --quick` (README, "Run time against error")
 SWITCH_WINDOW = ["verification.tv=[]", "time.end=0.03"]
 
 

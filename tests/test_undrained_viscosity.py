@@ -19,7 +19,7 @@ approaching particles, not on p.
 import numpy as np
 import pytest
 
-from psph.verify.sliding import block_scene
+from psph.app.sliding import block_scene
 
 STEPS = 100
 
@@ -27,8 +27,8 @@ STEPS = 100
 def _pressure_after_kick(sound: str, kick_rms: float) -> np.ndarray:
     from mpi4py import MPI
 
-    from psph.run import make_slabs
-    from psph.solver import Simulation
+    from psph.app.run import make_slabs
+    from psph.solver.simulation import Simulation
 
     scene = block_scene(['material.model="elastic"', 'boundaries.bottom.motion="slip"',
                          f'stabilisation.av_sound_speed="{sound}"'], nx=16, ny=8)

@@ -4,8 +4,8 @@ The full runs (`psph run harmonic`, `psph run strip_footing`) are in the README.
 
 import pytest
 
-from psph.run import run
-from psph.scene import load_scene
+from psph.app.run import run
+from psph.config.load import load_scene
 from tests.helpers import shared_tmp
 
 
@@ -47,7 +47,7 @@ def _check_strip_loading(err: dict) -> None:
 
 def _at_solid_cap(name: str, over: list[str]):
     """The scene with the pressure projection at the solid limit Eq. (41)."""
-    from psph.scene import solid_dt_limit
+    from psph.physics.limits import solid_dt_limit
 
     cap = solid_dt_limit(load_scene(name))
     return load_scene(name, over + ["pressure.scheme='projection'",

@@ -82,7 +82,7 @@ def test_ghosts_continue_a_geostatic_stress_linearly(drained):
     the linear continuation of the real particles' (gradient rho g, the weight of the soil
     between them), on an impermeable wall (p continued hydrostatically) and on a drained
     one (p mirrored through 0): the kink of a plain mirror excited the odd-even mode of
-    sigma' (issue 16, bench/issue16/oddeven_experiment.py). sigma'_xx and sigma'_zz stay
+    sigma' (issue 16, bench/diagnostics/oddeven_stress_mode.py). sigma'_xx and sigma'_zz stay
     mirrored, the shear stress as before."""
     g, rho, rho_l = 9.81, 2000.0, 1000.0
     gx = (np.arange(4) + 0.5) * DX
@@ -146,7 +146,7 @@ def test_plane_walls_are_the_sides_that_move_not_freely():
     """`plane_walls`: each side whose motion is not "free", in the order left, right,
     bottom, top, as the plane x[axis] = pos of the domain box, the sign of the soil's side
     and whether it is fixed (no-slip)."""
-    from psph.scene_boundaries import Boundaries, Boundary, plane_walls
+    from psph.config.boundaries import Boundaries, Boundary, plane_walls
 
     walls = plane_walls(Boundaries(right=Boundary(motion="slip"),
                                    bottom=Boundary(motion="fixed")), [1.0, -2.0], [5.0, 3.0])

@@ -11,7 +11,7 @@ import tracemalloc
 
 from mpi4py import MPI
 
-from psph.cli import main
+from psph.app.cli import main
 
 
 def traced(argv: list[str]) -> tuple[int, int]:

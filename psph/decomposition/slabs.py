@@ -15,7 +15,7 @@ from mpi4py import MPI
 from psph.decomposition.balance import balanced_cuts
 from psph.kernels.exact_sum import exact_total
 from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
-from psph.particles import ParticleStore
+from psph.state.particles import ParticleStore
 
 
 def slab_cuts(coords: np.ndarray, nranks: int, min_width: float = 0.0) -> np.ndarray:
@@ -111,7 +111,7 @@ def distributed_cuts(coords: np.ndarray, nranks: int, min_width: float, comm
 
 
 class CommReducer:
-    """The reductions of psph/scenes/lattice.py over the ranks of `comm` (each a
+    """The reductions of psph/geometry/lattice.py over the ranks of `comm` (each a
     collective on a small array)."""
 
     def __init__(self, comm):

@@ -22,12 +22,14 @@ from pathlib import Path
 
 import h5py
 
+from psph.config.load import load_scene, to_toml
+from psph.errors import SceneError
+from psph.io.checkpoint import read_checkpoint
+
 
 def branch_checkpoint(src: Path, dst: Path, overrides: list[str]) -> None:
     """Copy `src` to `dst` and replace its stored scene by the scene with `overrides`
     (validated as any scene; SceneError on a bad one)."""
-    from psph.scene import load_scene, to_toml
-
     with h5py.File(src, "r") as f:
         meta = json.loads(f.attrs["meta"])
     with tempfile.TemporaryDirectory() as tmp:
@@ -40,8 +42,6 @@ def branch_checkpoint(src: Path, dst: Path, overrides: list[str]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from psph.errors import SceneError
-
     ap = argparse.ArgumentParser(prog="python -m psph.io.branch",
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("checkpoint", type=Path)
@@ -49,8 +49,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", action="append", default=[], help="key.path=value")
     args = ap.parse_args(argv)
     try:
-        from psph.io.checkpoint import read_checkpoint
-
         read_checkpoint(args.checkpoint)  # a complete psph checkpoint, or one clear line
         if args.branch.resolve() == args.checkpoint.resolve():
             raise SceneError(f"{args.branch}: the branch must be a new file, not the "

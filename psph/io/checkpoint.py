@@ -29,7 +29,7 @@ import numpy as np
 import psph
 from psph.errors import SceneError
 from psph.io.snapshots import write_rows
-from psph.particles import ADDED_FIELDS, FIELDS
+from psph.state.particles import ADDED_FIELDS, FIELDS
 
 FORMAT = "psph-checkpoint-1"
 

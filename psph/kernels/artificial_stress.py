@@ -10,7 +10,7 @@ is a clumping of the skeleton's particles, and any clump changes div v, which th
 water of Eq. (25) resists with its stiffness K_l / n. Under suction the total stress is
 tensile while the skeleton is not; R from the total stress then pushed the particles of
 a sheared front or corner apart, they dilated and the suction grew (issue 13, cause 2:
-`python -m psph.verify.sliding`, the sliding block's corner reached -122 kPa with R from
+`python -m psph.app.sliding`, the sliding block's corner reached -122 kPa with R from
 the total stress and -76 kPa with R from sigma' or with no artificial stress at all).
 """
 

@@ -36,7 +36,7 @@ The artificial viscosity (Monaghan, in C_ij of Eq. 26) also takes vs on ghost pa
 -v, the ghosts ahead of a particle sliding at U approached it at 2U, those behind receded,
 and the one-sided term pushed the bottom row backward and upward. That drag (7x the
 soil's strength) and lift (suction under a nearly undrained soil) were numerical
-(issue 13, cause 1: `python -m psph.verify.sliding`). The wall's resistance to sliding
+(issue 13, cause 1: `python -m psph.app.sliding`). The wall's resistance to sliding
 is its shear stress, which the fixed-wall ghosts keep.
 """
 

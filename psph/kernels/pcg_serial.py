@@ -1,10 +1,10 @@
-"""`psph.pcg.pcg` in one compiled function, for a run on one rank (no halo to refresh).
+"""`psph.solver.pcg.pcg` in one compiled function, for a run on one rank (no halo to refresh).
 
 The same operations in the same order: the operator of `laplacian.apply_operator`, the
 wall-ghost refresh of the search direction (sign times its source row), the Jacobi
 preconditioner, and inner products that are correctly rounded exact sums (`exact_dot`,
 the bits `Slabs.exact_sum` gives on any rank count). So one rank here and two ranks
-through `psph.pcg` give the same iterates, iteration counts and solution
+through `psph.solver.pcg` give the same iterates, iteration counts and solution
 (tests/test_mpi.py), while a step of a small column no longer spends 80 % of its time in
 the Python loop of the solve (issue 14: 48 us an iteration for 250 particles).
 """
@@ -32,7 +32,7 @@ def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, w_diag: np
                sign: np.ndarray, tol: float, maxiter: int, r: np.ndarray, z: np.ndarray,
                d: np.ndarray, sd: np.ndarray, partials: np.ndarray) -> tuple:
     """Solve S x = rhs on rows 0..n-1 (rows n..n_total-1: wall ghosts, x's current on
-    entry). Returns (iterations, residual, converged) as `psph.pcg.pcg`."""
+    entry). Returns (iterations, residual, converged) as `psph.solver.pcg.pcg`."""
     apply_operator(n, n_pairs, pairs, w_diag, w_off, vol, storage, fixed, x, sd)
     for i in range(n):
         r[i] = rhs[i] - sd[i]
@@ -60,7 +60,7 @@ def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, w_diag: np
         for i in range(n):
             z[i] = r[i] / diag[i]
         rz_new = exact_dot(r, z, n, partials)
-        if rz == 0.0:  # breakdown, as psph.pcg
+        if rz == 0.0:  # breakdown, as psph.solver.pcg
             return it, res, False
         beta = rz_new / rz
         rz = rz_new

@@ -1,1 +1,2 @@
-"""Physics of one step, free of MPI: material constants, loads, initial state, stages."""
+"""Physics of one step, free of MPI: material constants, time-step limits, loads, the
+initial state and non-local softening."""

@@ -1,14 +1,15 @@
 """Initial particle state of a scene: of all particles (one process, post-processing) or
 of one slab's (each rank seeds its own, issue 15), with the same ids and bits either way.
 What needs the other ranks (global extrema, the top of each lattice column) comes through
-a reducer (psph/scenes/lattice.py); nothing here calls MPI."""
+a reducer (psph/geometry/lattice.py); nothing here calls MPI."""
 
 import math
 
 import numpy as np
 
-from psph.scenes.geometry import surface_layer
-from psph.scenes.lattice import SERIAL, extent, seed
+from psph.geometry.lattice import SERIAL, extent, seed
+from psph.geometry.profiles import read_profile
+from psph.geometry.shapes import surface_layer
 
 _NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
 
@@ -106,12 +107,10 @@ def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
 
 def table_elevation(table, x: np.ndarray) -> np.ndarray:
     """Elevation of a water table given as a level (m) or as a phreatic profile
-    ([[x, z], ...] or a CSV path, psph/scenes/profiles.py) at the abscissae x: linear
+    ([[x, z], ...] or a CSV path, psph/geometry/profiles.py) at the abscissae x: linear
     between the profile's points, held at its end values beyond them."""
     if isinstance(table, (int, float)):
         return np.full(len(x), float(table))
-    from psph.scenes.profiles import read_profile
-
     points = read_profile(table)
     return np.interp(x, points[:, 0], points[:, 1])
 

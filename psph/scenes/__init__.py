@@ -1,1 +1,1 @@
-"""Built-in scenes (*.toml beside this file) and geometry builders."""
+"""Built-in scenes: the *.toml files beside this file (data only; see psph.config.load)."""

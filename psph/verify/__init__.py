@@ -1,8 +1,12 @@
-"""Analytical references and error norms used by tests, benchmarks and summaries."""
+"""Analytical references and error norms used by tests, benchmarks and summaries: the
+reference solutions of the built-in verification scenes and metrics over a run's
+snapshots and histories. Nothing here runs a scene or reads a scene file."""
 
 import numpy as np
 
 from psph.verify import terzaghi
+from psph.verify.harmonic import from_scene
+from psph.verify.strip import loaded_half_width, undrained_pressure
 
 
 def reference_times(scene) -> list[float]:
@@ -26,8 +30,6 @@ def history_errors(scene, hist: dict[str, np.ndarray], probes: dict[str, tuple])
 
 
 def _harmonic(scene, hist, probes) -> dict:
-    from psph.verify.harmonic import from_scene
-
     top = max(b.max[1] for b in scene.particles.blocks)
     names = list(probes)
     depths = [top - probes[k][1] for k in names]
@@ -58,8 +60,6 @@ def _harmonic(scene, hist, probes) -> dict:
 
 
 def _strip(scene, hist, probes) -> dict:
-    from psph.verify.strip import loaded_half_width, undrained_pressure
-
     top = max(b.max[1] for b in scene.particles.blocks)
     load = scene.loads[0]
     b = loaded_half_width(scene)
@@ -78,44 +78,4 @@ def _strip(scene, hist, probes) -> dict:
             "peak_Pa": float(p.max()), "peak_time_s": float(t[np.argmax(p)]),
             "p_end_Pa": float(p[-1]), "settlement_end_m": float(-hist[f"uy_{name}"][-1]),
         }
-    return out
-
-
-def collapse_verification(path, scene, comm) -> dict:
-    """The `metrics` block of a collapse or slope run from its snapshots `path`
-    (particles.h5): the collapse metrics of the last snapshot, the slides over all of
-    them, the time series of the metrics (`series`: one entry a snapshot; README,
-    "Collapse metrics") and, for a coupled run, the pressure quality (Sections 4.4-4.5).
-    Collective: each rank reads its share of each snapshot's rows in turn (no rank holds
-    a snapshot or any array as long as the particle count; psph/verify/distributed.py)."""
-    import h5py
-
-    from psph.verify.collapse import collapse_metrics, series_block, slides_from
-    from psph.verify.distributed import exact_dot, read_share
-    from psph.verify.pressure import pressure_quality_from, snapshot_quality
-
-    dx = scene.particles.dx
-    coupled = scene.pressure.scheme != "none"
-    names = ("id", "x", "u", "p", "stress") if coupled else ("x", "u")
-    snaps, rows = [], []
-    with h5py.File(path, "r") as f:
-        for name in sorted(f["snapshots"]):
-            g = f["snapshots"][name]
-            work = all(k in g for k in ("plastic_work", "vol"))  # older files lack them
-            snap = read_share(g, names + (("plastic_work", "vol") if work else ()), comm)
-            snap["time"] = float(g.attrs["time"])
-            m = collapse_metrics(snap["x"], snap["x"] - snap["u"], dx, comm)
-            m["time_s"] = snap["time"]
-            # dissipated plastic work per metre (plane strain), the same bits on any ranks
-            m["plastic_work_J_per_m"] = exact_dot(snap["plastic_work"], snap["vol"], comm) \
-                if work else None
-            snaps.append(m)
-            if coupled:
-                rows.append(snapshot_quality(snap, scene, comm))
-    out = {"collapse": series_block(snaps, rows), "time_s": snaps[-1]["time_s"]}
-    out["collapse"].update(slides_from(np.array(out["collapse"]["series"]["time_s"]),
-                                       np.array(out["collapse"]["series"]["back_scarp_m"]),
-                                       snaps[0]["initial_height_m"], dx))
-    if coupled:
-        out["pressure_quality"] = pressure_quality_from(rows, scene)
     return out

@@ -1,10 +1,12 @@
 """Metrics of a collapse or slope failure from the particle positions (Sections 4.4-4.5):
 run-out distance, final height and back-scarp position."""
 
+import h5py
 import numpy as np
 from mpi4py import MPI
 
-from psph.verify.distributed import percentiles
+from psph.verify.distributed import exact_dot, percentiles, read_share
+from psph.verify.pressure import pressure_quality_from, snapshot_quality
 
 
 def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float, comm=None) -> dict:
@@ -124,4 +126,38 @@ def slides_from(times: np.ndarray, scarps: np.ndarray, h0: float, dx: float) -> 
     out.pop("initial_height_m")
     out["back_scarp_history_m"] = np.asarray(scarps).tolist()
     out["snapshot_times_s"] = np.asarray(times).tolist()
+    return out
+
+
+def collapse_verification(path, scene, comm) -> dict:
+    """The `metrics` block of a collapse or slope run from its snapshots `path`
+    (particles.h5): the collapse metrics of the last snapshot, the slides over all of
+    them, the time series of the metrics (`series`: one entry a snapshot; README,
+    "Collapse metrics") and, for a coupled run, the pressure quality (Sections 4.4-4.5).
+    Collective: each rank reads its share of each snapshot's rows in turn (no rank holds
+    a snapshot or any array as long as the particle count; psph/verify/distributed.py)."""
+    dx = scene.particles.dx
+    coupled = scene.pressure.scheme != "none"
+    names = ("id", "x", "u", "p", "stress") if coupled else ("x", "u")
+    snaps, rows = [], []
+    with h5py.File(path, "r") as f:
+        for name in sorted(f["snapshots"]):
+            g = f["snapshots"][name]
+            work = all(k in g for k in ("plastic_work", "vol"))  # older files lack them
+            snap = read_share(g, names + (("plastic_work", "vol") if work else ()), comm)
+            snap["time"] = float(g.attrs["time"])
+            m = collapse_metrics(snap["x"], snap["x"] - snap["u"], dx, comm)
+            m["time_s"] = snap["time"]
+            # dissipated plastic work per metre (plane strain), the same bits on any ranks
+            m["plastic_work_J_per_m"] = exact_dot(snap["plastic_work"], snap["vol"], comm) \
+                if work else None
+            snaps.append(m)
+            if coupled:
+                rows.append(snapshot_quality(snap, scene, comm))
+    out = {"collapse": series_block(snaps, rows), "time_s": snaps[-1]["time_s"]}
+    out["collapse"].update(slides_from(np.array(out["collapse"]["series"]["time_s"]),
+                                       np.array(out["collapse"]["series"]["back_scarp_m"]),
+                                       snaps[0]["initial_height_m"], dx))
+    if coupled:
+        out["pressure_quality"] = pressure_quality_from(rows, scene)
     return out

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from psph.physics.material import soil_from_scene
+
 
 @nb.njit(cache=True)
 def _integrate(nz, dz, dt, nsteps, every, rho, modulus, storage, kg, damping, q0, omega,
@@ -115,8 +117,6 @@ class HarmonicColumn:
 
 
 def from_scene(scene, damped: bool) -> HarmonicColumn:
-    from psph.physics.material import soil_from_scene
-
     soil = soil_from_scene(scene)
     load = scene.loads[0]
     top = max(b.max[1] for b in scene.particles.blocks)

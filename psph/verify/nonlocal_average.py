@@ -3,7 +3,7 @@
 weight sets m (m = 1: the plain average eps_bar; the material's m: eps_hat).
 
 Used by the regularisation tests and by the benches that look into a band
-(`bench/nonlocal_wall_band.py`, `bench/nonlocal_particle.py`).
+(`bench/diagnostics/nonlocal_wall_band.py`, `bench/diagnostics/nonlocal_particle.py`).
 """
 
 from collections.abc import Sequence

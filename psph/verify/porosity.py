@@ -13,15 +13,12 @@ produce (elastic compaction is about p' / K, 1e-3 for 10 kPa in the Section 4.5 
 numerical. The slopes' porosity floor clipped such particles until the stress filter's
 cause was found (README, "How the runs were made to finish").
 
-`python -m psph.verify.porosity OUT [OUT ...]` prints, for every snapshot at a multiple of
+`python -m psph.analysis.porosity OUT [OUT ...]` prints, for every snapshot at a multiple of
 5 s: the lowest n, the largest deficit n_law - n with its particle, and how many particles
 are more than 0.01 below n_law.
 """
 
-import argparse
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 
@@ -50,44 +47,3 @@ def porosity_deficit(snap: dict, n0: float, psi0_deg: float, s_f: float) -> dict
             "deficit_max": float(deficit[i]), "deficit_id": int(snap["id"][i]),
             "deficit_eps_p": float(snap["eps_p"][i]), "deficit_n": float(n[i]),
             "below_bound": int(np.sum(deficit > DEFICIT))}
-
-
-def main(argv: list[str] | None = None) -> int:
-    from psph.errors import SceneError
-    from psph.io.snapshots import read_snapshots
-    from psph.scene import run_scene
-
-    ap = argparse.ArgumentParser(prog="python -m psph.verify.porosity",
-                                 description="porosity against the flow rule's bound")
-    ap.add_argument("out", nargs="+", type=Path, help="run output directories")
-    ap.add_argument("--every", type=float, default=5.0, help="snapshot spacing to print (s)")
-    args = ap.parse_args(argv)
-    status = 0
-    for out in args.out:
-        try:
-            scene = run_scene(out)
-            snaps = read_snapshots(out / "particles.h5")
-        except (OSError, SceneError) as e:
-            print(f"{out}: error: {e}", file=sys.stderr)
-            status = 2
-            continue
-        pl = scene.material.plasticity
-        if pl is None:
-            print(f"{out}: not a Drucker-Prager run", file=sys.stderr)
-            status = 2
-            continue
-        print(f"{out}  (n0 = {scene.material.porosity}, psi0 = {pl.psi} deg, s_f = {pl.s_f})")
-        for snap in snaps:
-            k = snap["time"] / args.every
-            if abs(k - round(k)) > 1e-6:
-                continue
-            d = porosity_deficit(snap, scene.material.porosity, pl.psi, pl.s_f)
-            print(f"  t = {d['time_s']:5.1f} s  n_min {d['n_min']:.3f}  largest n_law - n "
-                  f"{d['deficit_max']:+.3f} (id {d['deficit_id']}, eps_p "
-                  f"{d['deficit_eps_p']:.2f}, n {d['deficit_n']:.3f})  more than "
-                  f"{DEFICIT} below: {d['below_bound']}")
-    return status
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -18,6 +18,8 @@ import math
 
 import numpy as np
 
+from psph.geometry.lattice import census, seed
+
 
 def undrained_pressure(q: float, half_width: float, x, depth) -> np.ndarray:
     """Excess pore pressure (Pa) right after an undrained strip load q over |x| < b."""
@@ -31,8 +33,6 @@ def loaded_half_width(scene) -> float:
     """Half-width of the load as discretised: loaded particles on the symmetry side x dx.
     The loaded particles are those of `surface_layer` (psph/physics/initial.py) within
     each load's range, seeded here from the outer lattice row only, not all particles."""
-    from psph.scenes.lattice import census, seed
-
     dx = scene.particles.dx
     loaded = set()
     for load in scene.loads:

@@ -1,0 +1,162 @@
+"""Throughput of the coupled elastic step (TPI), and steps/s of the Terzaghi column.
+
+Run under mpirun with the rank count to measure, e.g.
+    mpirun -n 1 .venv/bin/python bench/performance/throughput.py
+    mpirun -n 2 .venv/bin/python bench/performance/throughput.py
+Each run prints a table and writes bench/out/throughput-<ranks>rank.json; then
+`python bench/performance/throughput.py --plot` draws bench/out/throughput.png from all JSON files.
+Particle-steps per second per core = particles * steps / loop wall time / ranks.
+
+The column is the `terzaghi` scene under TPI from t = 0 with its top drained from t = 0 (a
+consolidating column). Until 2026-11-29 it ran TPI from t = 0 under the impervious loaded
+top, where TPI has no storage to answer the load: it blew up at step ~230 (1.1 ms) and the
+steps timed were those of particles flying apart with few neighbours (README, Throughput).
+Every case now checks that the state is still sound after the timed steps.
+"""
+
+import argparse
+import json
+import platform
+import sys
+import time
+import tomllib
+from datetime import date
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parents[1] / "out"
+
+BLOCK = """
+name = "throughput_{n}"
+[domain]
+min = [0.0, 0.0]
+max = [{w}, {hgt}]
+[particles]
+dx = 0.01
+h_factor = 1.3
+[[particles.blocks]]
+min = [0.0, 0.0]
+max = [{w}, {hgt}]
+[material]
+E = 20.0e6
+nu = 0.33
+porosity = 0.4
+rho_s = 2000.0
+k = 2.0e-4
+[boundaries]
+left = {{ motion = "slip" }}
+right = {{ motion = "slip" }}
+bottom = {{ motion = "fixed" }}
+top = {{ motion = "free", flow = "drained" }}
+[[loads]]
+pressure = 1.0e4
+ramp = 0.001
+[pressure]
+scheme = "tpi"
+alpha = 0.5
+[time]
+dt = 5.0e-6
+end = 1.0
+[stabilisation]
+damping = 0.02
+"""
+
+
+def measure(sim, steps: int, warm: int) -> float:
+    for _ in range(warm):
+        sim.advance_one()
+    sim.slabs.comm.Barrier()
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        sim.advance_one()
+    sim.slabs.comm.Barrier()
+    seconds = time.perf_counter() - t0
+    failed = sim.slabs.comm.allreduce(sim.failure is not None)
+    if failed:
+        raise SystemExit(f"{sim.scene.name}: the timed run failed ({sim.failure}); "
+                         "its steps/s would not be a throughput")
+    return seconds
+
+
+def main() -> None:
+    from mpi4py import MPI
+
+    from psph.app.run import make_slabs
+    from psph.config.load import load_scene, resolve, validate
+    from psph.solver.simulation import Simulation
+
+    comm = MPI.COMM_WORLD
+    ranks = comm.Get_size()
+    rows = []
+    for side_w, side_h, steps in ((1.0, 2.0, 60), (2.0, 5.0, 15)):
+        text = BLOCK.format(n=int(side_w * side_h * 1e4), w=side_w, hgt=side_h)
+        scene = resolve(validate(tomllib.loads(text)))
+        sim = Simulation(scene, make_slabs(scene, comm))
+        secs = measure(sim, steps, warm=3)
+        rate = sim.n_global * steps / secs
+        rows.append({"case": f"coupled elastic TPI step, N = {sim.n_global}",
+                     "particles": sim.n_global, "steps": steps, "seconds": secs,
+                     "particle_steps_per_s_per_core": rate / ranks,
+                     "steps_per_s": steps / secs})
+    scene = load_scene("terzaghi_tpi", ["pressure.explicit_until=0.0",
+                                    "boundaries.top.drained_from=0.0"])
+    sim = Simulation(scene, make_slabs(scene, comm))
+    steps = 20000
+    secs = measure(sim, steps, warm=200)
+    rows.append({"case": f"Terzaghi column (TPI), N = {sim.n_global}",
+                 "particles": sim.n_global, "steps": steps, "seconds": secs,
+                 "particle_steps_per_s_per_core": sim.n_global * steps / secs / ranks,
+                 "steps_per_s": steps / secs})
+    if comm.Get_rank() == 0:
+        print(f"\npsph throughput on {ranks} rank(s), {platform.processor() or 'cpu'}, "
+              f"{date.today()}")
+        print(f"{'case':44s} {'steps':>6s} {'wall s':>8s} {'p-steps/s/core':>15s} "
+              f"{'steps/s':>9s}")
+        for r in rows:
+            print(f"{r['case']:44s} {r['steps']:6d} {r['seconds']:8.3f} "
+                  f"{r['particle_steps_per_s_per_core']:15,.0f} {r['steps_per_s']:9.1f}")
+        OUT.mkdir(exist_ok=True)
+        meta = {"date": str(date.today()), "ranks": ranks, "machine": platform.node(),
+                "python": sys.version.split()[0], "rows": rows}
+        path = OUT / f"throughput-{ranks}rank.json"
+        path.write_text(json.dumps(meta, indent=2) + "\n")
+        print(f"wrote {path}")
+
+
+def plot() -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = [json.loads(p.read_text()) for p in sorted(OUT.glob("throughput-*rank.json"))]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    for run in runs:
+        blocks = [r for r in run["rows"] if r["case"].startswith("coupled")]
+        col = [r for r in run["rows"] if r["case"].startswith("Terzaghi")]
+        a1.plot([r["particles"] for r in blocks],
+                [r["particle_steps_per_s_per_core"] / 1e6 for r in blocks], "o-",
+                label=f"{run['ranks']} rank(s)")
+        a2.bar(str(run["ranks"]), col[0]["steps_per_s"])
+    a1.axhline(1.0, ls="--", c="grey", label="bar: 1e6")
+    a1.set_xscale("log")
+    a1.set_xlabel("particles")
+    a1.set_ylabel("million particle-steps / s / core")
+    a1.legend()
+    a1.set_title("coupled elastic TPI step (2D, h = 1.3 dx)")
+    a2.axhline(1500, ls="--", c="grey")
+    a2.set_xlabel("ranks")
+    a2.set_ylabel("steps / s")
+    a2.set_title("Terzaghi column, 1000 particles")
+    fig.suptitle(f"psph throughput, {runs[0]['date'] if runs else ''}")
+    fig.tight_layout()
+    fig.savefig(OUT / "throughput.png", dpi=110)
+    print(f"wrote {OUT / 'throughput.png'}")
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--plot", action="store_true")
+    if ap.parse_args().plot:
+        plot()
+    else:
+        main()

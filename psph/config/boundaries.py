@@ -1,0 +1,116 @@
+"""Scene models of the boundaries: the four sides of the domain box (mirror ghosts,
+`kernels/ghosts.py`) and rigid polylines lined with boundary particles (issue 16,
+`psph/solver/boundary.py`).
+
+A polyline is given by its points [[x, z], ...] (inline or a CSV file, as the ground
+profiles of `geometry/profiles.py`) and the side the soil is on: "above" or "below" for a
+profile z(x) (x strictly increasing), "left" or "right" for a wall x(z) (z strictly
+increasing). The boundary particles fill the other side.
+"""
+
+from typing import Annotated, Literal, NamedTuple
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from psph.errors import SceneRule
+from psph.geometry.profiles import ProfileError, read_profile
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, validate_default=True)
+
+
+class Boundary(_Model):
+    """One side of the domain box: wall motion and pore-water flow condition."""
+
+    motion: Literal["free", "slip", "fixed"] = "free"
+    flow: Literal["impermeable", "drained"] = "impermeable"
+    drained_from: Annotated[float, Field(ge=0.0)] = 0.0  # s; before it the side is impermeable
+
+
+class Polyline(_Model):
+    """A rigid boundary along a polyline, fixed in space (`[[boundaries.polylines]]`).
+
+    motion: "fixed" (no slip), "slip" (frictionless) or "friction" (Coulomb, with
+    `friction_angle` phi_b in degrees, 0 <= phi_b < 90: the wall's shear traction is at
+    most tan(phi_b) times the normal effective traction). drained: p = 0 on the line
+    (the pore pressure of the boundary particles is antisymmetric); else impermeable.
+    rows: "line" (rows (k + 1/2) dx from the line, `polylines.boundary_particles`) or
+    "lattice" (on the soil's lattice, dx from its lowest row in every column,
+    `polylines.lattice_particles`: for seeded soil at rest on a gently dipping line)."""
+
+    points: list[list[float]] | str
+    soil: Literal["above", "below", "left", "right"]
+    motion: Literal["fixed", "slip", "friction"] = "fixed"
+    friction_angle: float | None = None
+    drained: bool = False
+    rows: Literal["line", "lattice"] = "line"
+
+
+def points_of(line: Polyline, key: str = "polyline"):
+    """(k, 2) points of a polyline: a profile in x ("above"/"below") or in z
+    ("left"/"right"), strictly increasing in that coordinate. Raises SceneRule."""
+    axis = 0 if line.soil in ("above", "below") else 1
+    try:
+        return read_profile(line.points, axis=axis)
+    except ProfileError as e:
+        where = f"{key}.points" + ("" if e.where in ("points", "file") else f" {e.where}")
+        rule = e.rule + (f" (soil = '{line.soil}')" if "increase" in e.rule else "")
+        raise SceneRule(where, e.value, rule) from None
+
+
+class Boundaries(_Model):
+    left: Boundary = Boundary()
+    right: Boundary = Boundary()
+    bottom: Boundary = Boundary()
+    top: Boundary = Boundary()
+    polylines: list[Polyline] = []
+
+    @model_validator(mode="after")
+    def _polylines(self) -> "Boundaries":
+        for i, line in enumerate(self.polylines):
+            key = f"boundaries.polylines[{i}]"
+            points_of(line, key)
+            phi = line.friction_angle
+            if line.motion == "friction":
+                if phi is None:
+                    raise SceneRule(f"{key}.friction_angle", None,
+                                    "required with motion = 'friction' (degrees)")
+                if not 0.0 <= phi < 90.0:
+                    raise SceneRule(f"{key}.friction_angle", phi,
+                                    "must be in [0, 90) degrees")
+            elif phi is not None:
+                raise SceneRule(f"{key}.friction_angle", phi,
+                                f"only with motion = 'friction' (motion is '{line.motion}')")
+        return self
+
+
+# side -> (axis, which end of the domain (0 min, 1 max), sign: +1 soil at larger x[axis])
+SIDE_PLANES = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
+              "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
+
+
+class PlaneWalls(NamedTuple):
+    """The sides of the domain box that are walls (motion not "free"), in the order left,
+    right, bottom, top: the plane x[axis] = pos, the sign of the soil's side, fixed or
+    free-slip."""
+
+    sides: list[str]
+    axis: np.ndarray
+    pos: np.ndarray
+    sign: np.ndarray
+    fixed: np.ndarray
+
+
+def plane_walls(boundaries: Boundaries, lo, hi) -> PlaneWalls:
+    """The walls of `boundaries` on the domain box [lo, hi] (`domain.min`, `domain.max`)."""
+    walls = [(side, b) for side in SIDE_PLANES
+             if (b := getattr(boundaries, side)).motion != "free"]
+    ends = (lo, hi)
+    return PlaneWalls(
+        [side for side, _ in walls],
+        np.array([SIDE_PLANES[s][0] for s, _ in walls], np.int64),
+        np.array([ends[SIDE_PLANES[s][1]][SIDE_PLANES[s][0]] for s, _ in walls], float),
+        np.array([SIDE_PLANES[s][2] for s, _ in walls], float),
+        np.array([b.motion == "fixed" for _, b in walls], np.bool_))

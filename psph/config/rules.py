@@ -1,0 +1,190 @@
+"""The rules between the keys of a scene, checked once its sections are valid: the
+scene's model validator (`psph.config.schema.Scene`) calls `check_scene`. Each rule raises
+`SceneRule` (key, value, rule), which `psph.config.load.validate` turns into one line and
+exit 2."""
+
+import math
+from pathlib import Path
+
+from psph.config.materials import check_materials
+from psph.errors import SceneRule as _Rule
+from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
+from psph.physics.limits import (
+    TPI_ALPHA_MAX,
+    solid_dt_limit,
+    tpi_dt,
+    tpi_gain,
+    tpi_gain_limit,
+    undrained_dt_limit,
+)
+
+
+def check_scene(scene):
+    """The rules between keys of a scene whose sections are valid (`Scene`'s model
+    validator): the domain, the particle sources, the materials, the initial state,
+    probes, the schemes and the time step against Eq. (41) and TPI's bounds. Sets
+    `scene.material` to the first material; raises `SceneRule` (key, value, rule)."""
+    lo, hi = scene.domain.min, scene.domain.max
+    for d in range(2):
+        if hi[d] <= lo[d]:
+            raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
+    pa = scene.particles
+    if not (pa.blocks or pa.polygons or pa.meshes or pa.layers):
+        raise _Rule("particles", "no blocks, polygons, meshes or layers",
+                    "give at least one [[particles.blocks]], [[particles.polygons]], "
+                    "[[particles.meshes]] or [[particles.layers]]")
+    for il, layer in enumerate(pa.layers):
+        check_layer_profiles(layer, f"particles.layers[{il}]")
+    for ip, poly in enumerate(pa.polygons):
+        for iv, v in enumerate(poly.vertices):
+            for d in range(2):
+                if not lo[d] - 1e-12 <= v[d] <= hi[d] + 1e-12:
+                    raise _Rule(f"particles.polygons[{ip}].vertices[{iv}]", v,
+                                f"outside the domain [{lo}, {hi}]")
+    for ir, rm in enumerate(scene.remove):
+        box = rm.min is not None and rm.max is not None
+        if box == (rm.polygon is not None) or (rm.min is None) != (rm.max is None):
+            raise _Rule(f"remove[{ir}]", "region", "give either min and max, or polygon")
+    for im, mesh in enumerate(pa.meshes):
+        if not Path(mesh.file).is_file():
+            raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")
+    for ib, b in enumerate(scene.particles.blocks):
+        for d in range(2):
+            if b.max[d] <= b.min[d]:
+                raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
+                            f"must exceed particles.blocks[{ib}].min[{d}] = {b.min[d]}")
+            if b.min[d] < lo[d] - 1e-12:
+                raise _Rule(f"particles.blocks[{ib}].min[{d}]", b.min[d],
+                            f"particles outside the walls (domain.min[{d}] = {lo[d]})")
+            if b.max[d] > hi[d] + 1e-12:
+                raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
+                            f"particles outside the walls (domain.max[{d}] = {hi[d]})")
+    mats = check_materials(scene)
+    if scene.material is None:
+        scene.material = mats[0]
+    table = scene.initial.water_table
+    if table is not None and table != "surface":
+        try:
+            check_water_table(table, scene.domain.min, scene.domain.max)
+        except ProfileError as e:
+            where = "" if e.where in ("points", "file", "level") else f" {e.where}"
+            raise _Rule(f"initial.water_table{where}", e.value, e.rule) from None
+    if (scene.initial.k0 is not None or scene.initial.water_table is not None) \
+            and scene.gravity[1] >= 0.0:
+        key = "initial.k0" if scene.initial.k0 is not None else "initial.water_table"
+        raise _Rule(key, getattr(scene.initial, key.split(".")[1]),
+                    f"needs gravity along -y (gravity = {scene.gravity})")
+    if scene.initial.undrained_load:
+        check_undrained_load(scene)
+    for name, pt in scene.output.probes.items():
+        for d in range(2):
+            if not lo[d] <= pt[d] <= hi[d]:
+                raise _Rule(f"output.probes.{name}", pt,
+                            f"probe outside the domain [{lo}, {hi}]")
+    if scene.pressure.scheme == "projection" and scene.boundaries.polylines:
+        raise _Rule("pressure.scheme", "projection", "not yet with boundaries.polylines")
+    if scene.pressure.momentum != "pair" and scene.pressure.scheme not in ("explicit", "tpi"):
+        raise _Rule("pressure.momentum", scene.pressure.momentum,
+                    "needs pressure.scheme 'explicit' or 'tpi' (the projection's velocity "
+                    "correction is pair-symmetric)")
+    if scene.verification.reference == "terzaghi":
+        check_terzaghi_reference(scene)
+    if scene.time.end is None:
+        if scene.verification.reference == "none" or not scene.verification.tv:
+            raise _Rule("time.end", None, "required (no verification.tv to derive it from)")
+    if scene.time.dt is not None and not scene.time.allow_dt_above_solid_limit:
+        limit = solid_dt_limit(scene)
+        if scene.time.dt > limit:
+            raise _Rule("time.dt", scene.time.dt,
+                        f"above the solid limit Eq. (41) {limit:.3e} s "
+                        "(set time.allow_dt_above_solid_limit = true to force)")
+        if scene.pressure.scheme == "explicit" and scene.time.dt > undrained_dt_limit(scene):
+            raise _Rule("time.dt", scene.time.dt,
+                        f"above the undrained wave limit {undrained_dt_limit(scene):.3e} s "
+                        "of the explicit pressure update (Eq. 41 with the undrained "
+                        "modulus; set time.allow_dt_above_solid_limit = true to force)")
+    if scene.pressure.scheme == "tpi" and not scene.pressure.allow_unstable:
+        check_tpi_stability(scene)
+    check_integrator(scene)
+    return scene
+
+
+def check_integrator(scene) -> None:
+    """The projection's default integrator is the symplectic one, the others' the one-sweep
+    step; the one-sweep step with the projection is refused (issue 39: forward Euler for
+    the skeleton, which the projection's undamped undrained mode does not absorb)."""
+    if scene.time.integrator is None:
+        scene.time.integrator = "symplectic" if scene.pressure.scheme == "projection" \
+            else "euler"
+    if scene.pressure.scheme == "projection" and scene.time.integrator == "euler" \
+            and not scene.pressure.allow_unstable:
+        raise _Rule("time.integrator", "euler",
+                    "has no stable step with pressure.scheme 'projection' (the one-sweep "
+                    "step is forward Euler for the skeleton: on the Section 4.1 columns it "
+                    "grew at 0.25 to 1 x Eq. (41), bench/verification/projection_stability.py); "
+                    f"use 'symplectic', stable to Eq. (41) {solid_dt_limit(scene):.3e} s "
+                    "(pressure.allow_unstable = true to force)")
+
+
+def check_terzaghi_reference(scene) -> None:
+    """What `verify.terzaghi.from_scene` reads: a load on the top, one drainage time."""
+    key = "verification.reference"
+    if not scene.loads or scene.loads[0].side != "top":
+        raise _Rule(key, "terzaghi", "needs a [[loads]] entry on the top side first")
+    ends = {getattr(scene.boundaries, s).drained_from for s in ("top", "bottom")
+            if getattr(scene.boundaries, s).flow == "drained"}
+    if len(ends) > 1:
+        raise _Rule(key, "terzaghi", "needs the top and the bottom drained from the same "
+                    f"time (boundaries.top/bottom.drained_from: {sorted(ends)})")
+
+
+def check_undrained_load(scene) -> None:
+    """`initial.undrained_load` is the oedometric state of one step load over a side."""
+    key = "initial.undrained_load"
+    if len(scene.loads) != 1:
+        raise _Rule(key, True, f"needs exactly one [[loads]] (got {len(scene.loads)})")
+    load = scene.loads[0]
+    if load.history != "ramp" or load.ramp != 0.0 or load.range is not None:
+        raise _Rule(key, True, "needs a step load over the whole side (loads[0]: history "
+                    "= 'ramp', ramp = 0, no range)")
+    if any(scene.gravity) or scene.initial.k0 is not None or \
+            scene.initial.water_table is not None:
+        raise _Rule(key, True, "needs gravity = [0, 0] and no initial.k0 or water_table")
+    if scene.pressure.scheme == "none":
+        raise _Rule(key, True, "needs pore water (pressure.scheme is 'none')")
+    if len(scene.materials) > 1:
+        raise _Rule(key, True, "needs a single material (the column's own modulus)")
+
+
+def check_tpi_stability(scene) -> None:
+    """TPI needs somewhere to drain, and the measured bounds of Eq. (38)-(39): alpha <=
+    0.75 and G <= `tpi_gain_limit`."""
+    force = "set pressure.allow_unstable = true to force"
+    drained = [getattr(scene.boundaries, side).drained_from
+               for side in ("left", "right", "bottom", "top")
+               if getattr(scene.boundaries, side).flow == "drained"]
+    if scene.loads and scene.pressure.ponding != "drained" and \
+            scene.pressure.explicit_until < min(drained, default=math.inf):
+        raise _Rule("pressure.explicit_until", scene.pressure.explicit_until,
+                    "TPI loading while no side is drained: Eq. (38) has no storage term, "
+                    "so with every side impermeable it fixes p only up to a constant and "
+                    "the undrained loading blows up (the terzaghi column at 1.1 ms); run "
+                    "the explicit scheme until the first side drains "
+                    f"({min(drained, default=math.inf)} s); {force}")
+    alpha = scene.pressure.alpha
+    if alpha > TPI_ALPHA_MAX:
+        raise _Rule("pressure.alpha", alpha,
+                    f"TPI is unstable for alpha above {TPI_ALPHA_MAX} at every R measured "
+                    f"(bench/verification/stability.py; the paper: above 0.75 at R = 98); {force}")
+    dt = tpi_dt(scene)
+    gravity = any(g != 0.0 for g in scene.gravity)
+    gain, limit = tpi_gain(scene, dt), tpi_gain_limit(alpha, gravity)
+    if gain > limit:
+        key, value = ("time.dt", dt) if scene.time.dt is not None else \
+            ("pressure.R", scene.pressure.R)
+        rule = "1.15 (1 - alpha)" if gravity else "min(5 (1 - alpha)^2, 3.6)"
+        bench = "bench/verification/tpi_gravity.py" + ("" if gravity else " --no-gravity")
+        raise _Rule(key, value,
+                    f"TPI gain G = dt gamma_l / (rho k) = {gain:.3g} at dt = {dt:.3e} s "
+                    f"is above its stability bound {rule} = {limit:.3g} ({bench}): "
+                    f"dt <= {dt * limit / gain:.3e} s; {force}")

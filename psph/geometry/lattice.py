@@ -1,0 +1,232 @@
+"""The scene's particle lattice without building it whole (issue 15, item 1).
+
+Global order of the particles (their ids): each block's own lattice in row-major order
+(x fastest), blocks in scene order, then the points of the domain lattice inside the
+polygons, meshes and layers ("the fill"), in lattice order. `census` counts the particles
+per coordinate along one axis (each rank evaluating a share of the fill's rows), from which
+the slab cuts follow; `seed` builds only the particles of one slab [lo, hi) along an axis,
+with their global ids. Both reach the other ranks through a `reducer` (element-wise
+max / min / sum over ranks and the exclusive prefix sum over ranks, arrays as long as a
+lattice's rows or columns): `SerialReducer` for one process, `psph.decomposition.slabs.
+CommReducer` under MPI. Nothing here imports mpi4py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from psph.geometry.profiles import check_layer_profiles, inside_layer
+from psph.geometry.shapes import inside_polygon, inside_triangles, read_mesh
+
+
+class SerialReducer:
+    """The reductions of a single process: every one is the identity."""
+
+    rank = 0
+    size = 1
+
+    def max(self, a) -> np.ndarray:
+        return np.array(a)
+
+    def min(self, a) -> np.ndarray:
+        return np.array(a)
+
+    def sum(self, a) -> np.ndarray:
+        return np.array(a)
+
+    def exclusive_scan(self, a) -> np.ndarray:
+        """Sum of the lower ranks' arrays (zeros on rank 0)."""
+        return np.zeros_like(np.asarray(a))
+
+
+SERIAL = SerialReducer()
+
+
+def lattice_axes(lo, hi, dx: float) -> tuple[np.ndarray, np.ndarray]:
+    """The x and y centres of `lattice_block(lo, hi, dx)` (the same floats)."""
+    nx = max(int(round((hi[0] - lo[0]) / dx)), 1)
+    ny = max(int(round((hi[1] - lo[1]) / dx)), 1)
+    return lo[0] + (np.arange(nx) + 0.5) * dx, lo[1] + (np.arange(ny) + 0.5) * dx
+
+
+class Fill:
+    """The polygons, meshes and layers of a scene, read once (every file and profile, so
+    that bad input raises the same error on every rank), with the box that holds them."""
+
+    def __init__(self, scene):
+        pa = scene.particles
+        self.polygons = [np.asarray(p.vertices, float) for p in pa.polygons]
+        self.meshes = [read_mesh(m.file) for m in pa.meshes]
+        self.layers = [check_layer_profiles(layer, f"particles.layers[{il}]")
+                       for il, layer in enumerate(pa.layers)]
+        # each source's material index, in the order polygons, meshes, layers
+        self.indices = [material_index(scene, src.material)
+                        for src in (*pa.polygons, *pa.meshes, *pa.layers)]
+        corners = list(self.polygons) + [xy[tri.ravel()] for xy, tri in self.meshes]
+        for top, bottom in self.layers:
+            x0, x1 = max(top[0, 0], bottom[0, 0]), min(top[-1, 0], bottom[-1, 0])
+            corners.append(np.array([[x0, bottom[:, 1].min()], [x1, top[:, 1].max()]]))
+        self.empty = not corners
+        if not self.empty:
+            pts = np.concatenate(corners)
+            # wider than any edge tolerance of the tests below (1e-9 of the shape's size)
+            margin = 1e-6 * max(np.abs(pts).max(), 1.0) + 1e-9
+            self.lo, self.hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
+
+    def span(self, c: np.ndarray, axis: int) -> np.ndarray:
+        """Indices of the lattice coordinates c (along axis) within the box."""
+        return np.flatnonzero((c >= self.lo[axis]) & (c <= self.hi[axis]))
+
+    def mask(self, points: np.ndarray) -> np.ndarray:
+        """Which points lie in a polygon, mesh or layer."""
+        taken = np.zeros(len(points), bool)
+        for vertices in self.polygons:
+            taken |= inside_polygon(points, vertices)
+        for xy, tri in self.meshes:
+            taken |= inside_triangles(points, xy, tri)
+        for top, bottom in self.layers:
+            taken |= inside_layer(points, top, bottom)
+        return taken
+
+    def material(self, points: np.ndarray) -> np.ndarray:
+        """The material index (float64) of points inside the fill: that of the last source
+        (polygons, then meshes, then layers, each in scene order) that holds the point, as
+        the fill takes a point once however many sources hold it. With one material every
+        point gets 0 and no source is tested."""
+        index = np.zeros(len(points))
+        if not any(self.indices):
+            return index
+        tests = [lambda v=v: inside_polygon(points, v) for v in self.polygons]
+        tests += [lambda m=m: inside_triangles(points, *m) for m in self.meshes]
+        tests += [lambda lay=lay: inside_layer(points, *lay) for lay in self.layers]
+        for test, k in zip(tests, self.indices, strict=True):
+            index[test()] = k
+        return index
+
+
+def material_index(scene, name: str | None) -> int:
+    """Index of a source's `material` (None: 0, the first)."""
+    if name is None:
+        return 0
+    return next(i for i, m in enumerate(scene.materials) if m.name == name)
+
+
+def _grid(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    gx, gy = np.meshgrid(xs, ys, indexing="xy")
+    return np.column_stack([gx.ravel(), gy.ravel()])
+
+
+def census(scene, axis: int, reducer=SERIAL) -> tuple[np.ndarray, np.ndarray]:
+    """(values, counts): every particle coordinate along `axis` (values may repeat) and
+    how many particles have it, the same on every rank (collective). Blocks are counted
+    analytically; the fill's rows are shared among the ranks, each evaluating its own."""
+    dx = scene.particles.dx
+    values, counts = [], []
+    for b in scene.particles.blocks:
+        c = lattice_axes(b.min, b.max, dx)
+        values.append(c[axis])
+        counts.append(np.full(len(c[axis]), len(c[1 - axis]), np.int64))
+    fill = Fill(scene)
+    if not fill.empty:
+        c = lattice_axes(scene.domain.min, scene.domain.max, dx)
+        cols, rows = fill.span(c[0], 0), fill.span(c[1], 1)
+        share = rows[reducer.rank * len(rows) // reducer.size:
+                     (reducer.rank + 1) * len(rows) // reducer.size]
+        taken = fill.mask(_grid(c[0][cols], c[1][share])).reshape(len(share), len(cols))
+        local = np.zeros(len(c[axis]), np.int64)
+        if axis == 0:
+            local[cols] = taken.sum(axis=0, dtype=np.int64)
+        else:
+            local[share] = taken.sum(axis=1, dtype=np.int64)
+        values.append(c[axis])
+        counts.append(reducer.sum(local))
+    return np.concatenate(values), np.concatenate(counts)
+
+
+def _in_slab(c: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Indices of the (increasing) lattice coordinates c in [lo, hi)."""
+    return np.flatnonzero((c >= lo) & (c < hi))
+
+
+def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
+         reducer=SERIAL, material: bool = False) -> tuple[np.ndarray, ...]:
+    """Positions (n, 2) and global ids (n,) int64 of the particles whose coordinate along
+    `axis` lies in [lo, hi), in id order (collective: two reductions of the fill's per-row
+    counts). The default slab is the whole scene on one process. `material`: also each
+    particle's material index (n,) float64, that of its source (`Fill.material`)."""
+    dx = scene.particles.dx
+    xs_out, keys, mats = [], [], []
+    offset = 0
+    for b in scene.particles.blocks:
+        c = lattice_axes(b.min, b.max, dx)
+        idx = [np.arange(len(c[0])), np.arange(len(c[1]))]
+        idx[axis] = _in_slab(c[axis], lo, hi)
+        xs_out.append(_grid(c[0][idx[0]], c[1][idx[1]]))
+        keys.append((offset + idx[1][:, None] * len(c[0]) + idx[0][None, :]).ravel())
+        mats.append(np.full(len(keys[-1]), float(material_index(scene, b.material))))
+        offset += len(c[0]) * len(c[1])
+    fill = Fill(scene)
+    if not fill.empty:
+        xs, ys = lattice_axes(scene.domain.min, scene.domain.max, dx)
+        idx = [fill.span(xs, 0), fill.span(ys, 1)]  # no point outside the box is taken
+        c = (xs, ys)[axis][idx[axis]]
+        idx[axis] = idx[axis][(c >= lo) & (c < hi)]
+        points = _grid(xs[idx[0]], ys[idx[1]])
+        taken = fill.mask(points).reshape(len(idx[1]), len(idx[0]))
+        # id = offset + taken points in the rows below + in this row on lower ranks (the
+        # slabs are in rank order along the axis) + those before it in this rank's row
+        rows = np.zeros(len(ys), np.int64)
+        rows[idx[1]] = taken.sum(axis=1, dtype=np.int64)
+        per_row = reducer.sum(rows)
+        lower = reducer.exclusive_scan(rows)
+        first = offset + np.concatenate(([0], np.cumsum(per_row)[:-1])) + lower
+        key = first[idx[1]][:, None] + np.cumsum(taken, axis=1, dtype=np.int64) - 1
+        xs_out.append(points[taken.ravel()])
+        keys.append(key[taken])
+        if material:
+            mats.append(fill.material(xs_out[-1]))
+    if material:
+        return np.concatenate(xs_out), np.concatenate(keys), np.concatenate(mats)
+    return np.concatenate(xs_out), np.concatenate(keys)
+
+
+def extent(x: np.ndarray, reducer=SERIAL) -> np.ndarray:
+    """(2, dim): the smallest and the largest coordinate of all ranks' particles `x` along
+    each axis (collective; exact, so the same bits as over one global array)."""
+    dim = x.shape[1]
+    lo = x.min(axis=0) if len(x) else np.full(dim, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(dim, -np.inf)
+    return np.stack([reducer.min(lo), reducer.max(hi)])
+
+
+def nearest(points, x: np.ndarray, key: np.ndarray, reducer=SERIAL
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Global id (m,) and position (m, dim) of the particle nearest to each of the m
+    `points` among all ranks' particles `x` with ids `key`; on a tie the lowest id, as the
+    first argmin over all particles in id order (collective: three small reductions)."""
+    points = np.asarray(points, float).reshape(len(points), -1)
+    m, dim = points.shape
+    d2 = [np.sum((x - pt) ** 2, axis=1) for pt in points]  # a few probes: a short loop
+    best = reducer.min(np.array([d.min() if len(d) else np.inf for d in d2]))
+    none = np.iinfo(np.int64).max
+    ids = reducer.min(np.array([key[d == b].min() if np.any(d == b) else none
+                                for d, b in zip(d2, best, strict=True)], np.int64))
+    pos = np.full((m, dim), -np.inf)
+    for j in range(m):
+        hit = np.flatnonzero(key == ids[j])
+        if len(hit):
+            pos[j] = x[hit[0]]
+    return ids, reducer.max(pos)
+
+
+def probe_ids(scene, x: np.ndarray | None = None, key: np.ndarray | None = None,
+              reducer=SERIAL, slab: tuple | None = None) -> dict[str, tuple[int, tuple]]:
+    """Global id and initial position of the particle nearest to each `output.probes`
+    point, from each rank's initial particles `x` with ids `key` (default: seeded here for
+    `slab`, or all of them on one process). Collective when any probe is set."""
+    if not scene.output.probes:
+        return {}
+    if x is None:
+        x, key = seed(scene, *(slab or ()), reducer=reducer)
+    ids, pos = nearest(list(scene.output.probes.values()), x, key, reducer)
+    return {name: (int(ids[j]), tuple(pos[j])) for j, name in enumerate(scene.output.probes)}

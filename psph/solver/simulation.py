@@ -1,0 +1,314 @@
+"""Builds the step pipeline once from the scene and runs the time loop.
+
+Per step: [rebalance every K] -> exchange (migration + halo) -> ghosts (walls) ->
+neighbours (cell lists) -> interactions (fused pair sums) -> update (Eq. 22-27, 38-45).
+Outputs, diagnostics and progress are scheduled callbacks of the loop; every decision
+that changes control flow comes from a collective or from values identical on all ranks
+(time, step).
+"""
+
+import math
+import time
+
+import numpy as np
+
+from psph.config.boundaries import plane_walls
+from psph.config.schema import Scene
+from psph.decomposition.census import Census
+from psph.errors import NumericalError
+from psph.geometry.lattice import extent, seed
+from psph.geometry.shapes import inside_polygon
+from psph.kernels.interactions import NSUMS
+from psph.kernels.laplacian import lattice_moment
+from psph.kernels.spline import w_cubic
+from psph.kernels.update import (
+    SCHEME_EXPLICIT,
+    SCHEME_NONE,
+    SCHEME_PROJECTION,
+    SCHEME_TPI,
+)
+from psph.physics.initial import initial_particles
+from psph.physics.material import (
+    fastest_undrained,
+    material_table,
+    plasticity_parameters,
+    soil_from_scene,
+    stiffest,
+)
+from psph.physics.softening import nonlocal_softening
+from psph.solver.boundary import PolylineBoundaries, halo_width
+from psph.solver.drainage import Drainage
+from psph.solver.pressure_solve import PressureSolve
+from psph.solver.stages import Stage, Stages
+from psph.solver.stepping import time_stepping
+from psph.state.particles import ParticleStore
+
+
+class Simulation(Stages):
+    """State, pipeline and clock of one run on this rank."""
+
+    def __init__(self, scene: Scene, slabs, particles: dict | None = None, t: float = 0.0,
+                 step: int = 0, n_ids: int | None = None, removed: np.ndarray | None = None,
+                 removals_done: int = 0):
+        """`particles`: this rank's rows of every particle field (those of a checkpoint in
+        its slab) with the clock (t, step) they belong to; default: the scene's initial
+        particles of this rank's slab at t = 0, seeded here (no rank builds them all).
+        `n_ids`: how many ids the run created (default: all particles), `removed`: this
+        rank's share of the ids removed so far (a checkpoint's; see Census), and
+        `removals_done`: how many `remove` regions were applied already. Collective."""
+        self.scene = scene
+        self.slabs = slabs
+        self.soil = soil_from_scene(scene)
+        self.h = scene.h
+        self.stepping = time_stepping(scene)
+        self.t = t
+        self.step = step
+        self.first_step = step
+
+        fresh = particles is None
+        data = initial_particles(scene, slabs.reducer, slabs.slab) if fresh else particles
+        n_local = len(data["key"])
+        self.n_global = int(slabs.reducer.sum(np.array([n_local], np.int64))[0])
+        # ids run 0..n_ids-1; each is owned once or removed once (checked at snapshots)
+        self.census = Census(slabs.comm, self.n_global if n_ids is None else n_ids, removed)
+        self.n_ids = self.census.n_ids
+        self.removals = sorted(scene.remove, key=lambda r: r.at)
+        self.removals_done = removals_done
+        self.store = ParticleStore(2 * n_local + 256)
+        self.store.load(data)
+        if fresh:
+            self.store.u[:] = 0.0
+
+        lo, hi = scene.domain.min, scene.domain.max
+        walls = plane_walls(scene.boundaries, lo, hi)
+        self.wall_axis, self.wall_pos = walls.axis, walls.pos
+        self.wall_sign, self.wall_fixed = walls.sign, walls.fixed
+        # ghost velocities as on a free-slip wall, for the stretching rates (interactions.py);
+        # without a fixed wall they are the velocities themselves
+        nw = len(walls.sides)  # polyline boundary particles: sort keys above every ghost's
+        self.polylines = PolylineBoundaries(scene, float(self.n_ids) * (1 + nw + nw * nw)) \
+            if scene.boundaries.polylines else None
+        self.halo = halo_width(scene)
+        self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() or self.polylines else None
+        self.ghost_src = np.zeros(0, np.int64)
+        self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
+        # the initial lattice's extent, also on a restart (x - u of a checkpoint is not
+        # its bits): from this slab's share of it
+        self.drainage = Drainage(scene, walls.sides, lambda: extent(
+            data["x"] if fresh else seed(scene, *slabs.slab, reducer=slabs.reducer)[0],
+            slabs.reducer))
+        self.pressure_solve = PressureSolve(self)
+        self.solve = self.pressure_solve.stats
+
+        margin = 2.0 * self.h
+        self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
+        self.cell_size = 2.0 * self.h
+        self.softening = nonlocal_softening(scene, self.cell_size, self.wall_axis,
+                                            self.wall_pos)  # None: local softening
+        self.origin = np.array(lo, float) - 4.0 * self.cell_size
+        span = np.array(hi, float) - np.array(lo, float)
+        self.cell_max = (np.ceil(span / self.cell_size) + 8).astype(np.int64)
+        self.grid_lo = np.zeros(2, np.int64)
+        self.ncell = np.zeros(2, np.int64)
+        self.cell_start = np.zeros(1024, np.int64)
+        self.fill = np.zeros(1024, np.int64)
+        self.cell_of = np.zeros(self.store.cap, np.int64)
+        self.order = np.zeros(self.store.cap, np.int64)
+        self.sums = np.zeros((self.store.cap, NSUMS))
+        self.astress = np.zeros((1, 3))
+        self.w_dx = w_cubic(scene.particles.dx, self.h)
+        self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h)  # F~ of Eq. (23)
+        self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
+        self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
+        self.scratch_shift = np.zeros((0, 5))  # grad C, the shift and 1/2 of `_shift`
+        self.load_value = np.zeros(max(len(scene.loads), 1))
+
+        g = scene.gravity
+        self.body = (float(g[0]), float(g[1]))
+        self.body_force = np.array(self.body)  # for the ghosts' wall-normal stress (ghosts.py)
+        self.head_b = self.soil.rho_l * np.array(self.body) if scene.pressure.scheme != "none" \
+            else np.zeros(2)
+        # several materials (issue 16): a row per material, indexed by the particle's
+        # `material`; damping and the viscosity's sound speed from the stiffest one
+        self.mat = material_table(scene)
+        self.stiff = stiffest(scene)
+        self.damping = self.stiff.damping_coefficient(scene.stabilisation.damping, self.h)
+        self.coupled = scene.pressure.scheme != "none"
+        # weight of p in the pair stress of Eq. (26): 1 "pair", 0.5 "closure", 0 the others
+        self.p_weight = {"pair": 1.0, "closure": 0.5}.get(scene.pressure.momentum, 0.0) \
+            if self.coupled else 1.0
+        self.av_sound_speed = (fastest_undrained(scene)
+                               if self.coupled and scene.stabilisation.av_sound_speed
+                               == "undrained" else self.stiff.sound_speed)
+        self.plastic = any(m.model == "drucker_prager" for m in scene.material_list)
+        self.dp = plasticity_parameters(scene)
+        self.acc_term = self.coupled and scene.pressure.acceleration_term
+        self.symplectic = scene.time.integrator == "symplectic"
+        # free-surface pressure condition: 0 none, 1 ponding p <= 0, 2 drained p = 0
+        self.ponding = {False: 0, True: 1, "drained": 2}[scene.pressure.ponding]
+        # pairs of the last sweep, reused by the symplectic velocity sweep
+        # (and by the mass-balance residual of the explicit and TPI pressure)
+        self.shifting = scene.stabilisation.shifting
+        self.record_pairs = self.symplectic or self.coupled or self.shifting > 0.0
+        n_pairs0 = 16 * self.store.cap if self.record_pairs else 0
+        self.pairs = np.zeros((n_pairs0, 2), np.int64)
+        self.pair_g = np.zeros((n_pairs0, 2))
+        self.n_pairs = 0
+        self.dt, self.scheme = self.stepping.at(0.0)
+        self.bad_particle = -1
+        self.failure = None
+        self.equilibrium = {}  # what `equilibrate` did
+        self.stages = self._assemble()
+
+    # ------------------------------------------------------------------ pipeline
+
+    def _assemble(self) -> list[Stage]:
+        """Only the stages the scene needs, in order."""
+        stages = []
+        k = self.scene.decomposition.rebalance_every
+        if self.slabs.size > 1 and k > 0:
+            stages.append(Stage(f"rebalance[every {k}]", self._rebalance, every=k))
+        if self.slabs.size > 1:
+            stages.append(Stage("exchange", self._exchange))
+        else:
+            stages.append(Stage("reset_halo", self._reset_halo))
+        if len(self.wall_axis):
+            stages.append(Stage("ghosts", self._ghosts))
+        if self.polylines:
+            stages.append(Stage("boundary_rows", self._boundary_rows))
+        stages.append(Stage("neighbours", self._neighbours))
+        if self.polylines:
+            stages.append(Stage("boundary_state", self._boundary_state))
+        if self.coupled and self.drainage.has_planes:
+            stages.append(Stage("drained_planes", self._drained_planes))
+        m = self.scene.stabilisation.shepard_every
+        if self.coupled and m > 0:
+            stab = self.scene.stabilisation
+            name = "shepard"
+            if stab.shepard_stress:
+                name += "+stress" if stab.stress_filter == "shepard" else "+mls_stress"
+            stages.append(Stage(f"{name}[every {m}]", self._shepard, every=m))
+        name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
+            (",acceleration_term" if self.acc_term else "") + "]"
+        stages.append(Stage(name, self._interactions))
+        if self.symplectic:
+            stages.append(Stage("kick+velocity_sweep", self._kick))
+        if self.stepping.scheme_main == SCHEME_PROJECTION:
+            stages.append(Stage("pressure_solve[pcg,jacobi]+correction", self._project))
+        pname = {SCHEME_NONE: "dry", SCHEME_EXPLICIT: "explicit", SCHEME_TPI: "tpi",
+                 SCHEME_PROJECTION: "projection"}[self.stepping.scheme_main]
+        if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
+            pname = "explicit->tpi"
+        model = ",drucker_prager" if self.plastic else ",elastic"
+        if self.softening:  # x as at the neighbour search: before shifting moves it
+            stages.append(Stage(self.softening.name(), lambda: self.softening.average(
+                self.store, self.cell_of, self.cell_start, self.order, self.ncell)))
+        if self.shifting > 0.0:
+            # before the update: the sweep's volumes, which the update changes on owned
+            # rows only (halo copies keep them), so the sums stay partition-independent
+            stages.append(Stage("shifting", self._shift))
+        stages.append(Stage(f"update[{pname}{model}]", self._update))
+        return stages
+
+    def state_bytes(self) -> int:
+        """Bytes of the running state on this rank: the particle store's arrays and the
+        simulation's own (scratch, neighbour lists, pair lists, bookkeeping)."""
+        arrays = list(self.store.arrays.values()) + [
+            a for a in vars(self).values() if isinstance(a, np.ndarray)]
+        return int(sum(a.nbytes for a in arrays))
+
+    # ------------------------------------------------------------------ stepping
+
+    def apply_removals(self) -> int:
+        """Remove the particles inside every `remove` region whose time has come
+        (collective: t is the same on every rank). Returns how many were removed."""
+        removed = 0
+        while (self.removals_done < len(self.removals)
+               and self.t >= self.removals[self.removals_done].at * (1 - 1e-12)):
+            rm = self.removals[self.removals_done]
+            st = self.store
+            n = st.n_owned
+            x = st.x[:n]
+            if rm.polygon is not None:
+                inside = inside_polygon(x, rm.polygon)
+            else:
+                inside = np.all((x >= np.array(rm.min)) & (x <= np.array(rm.max)), axis=1)
+            ids = st.key[:n][inside].astype(np.int64)
+            keep = np.flatnonzero(~inside)
+            for a in st.all_rows:
+                a[:len(keep)] = a[keep]
+            st.n_owned = len(keep)
+            st.n_halo = st.n_ghost = 0
+            removed += self.census.remove(ids)
+            self.n_global = self.census.n_alive
+            self.removals_done += 1
+        return removed
+
+    def advance_one(self) -> None:
+        if self.removals_done < len(self.removals):
+            self.apply_removals()
+        self.dt, self.scheme = self.stepping.at(self.t)
+        timer = time.perf_counter
+        for stage in self.stages:
+            if self.step % stage.every:
+                continue
+            t0 = timer()
+            stage.run()
+            stage.seconds += timer() - t0
+            stage.calls += 1
+        self.t += self.dt
+        self.step += 1
+
+    def equilibrate(self) -> dict:
+        """Gravity loading before t = 0 (collective; Section 4.5: "followed by
+        gravitational loading to obtain the initial in-situ stress conditions").
+
+        The K0 state of `initial.k0` is in equilibrium only under level ground: under a
+        slope face or at the free end of a block it unloads at t = 0, and a nearly
+        undrained soil answers that unloading with suction (issue 13, cause 4). For
+        `initial.equilibrate` seconds the step pipeline runs with the pore pressure held
+        at its hydrostatic value (drained, the steady state of the water table), no
+        removals, no Shepard or rebalancing, and the global damping of Eq. (43)-(44) at
+        eta_d = `initial.equilibrate_damping`; the clock stays at 0. Then velocities and
+        displacements are zeroed, so the run starts at rest from the relaxed stress.
+        Returns what it did, for summary.json."""
+        ini = self.scene.initial
+        if ini.equilibrate <= 0.0 or self.step > 0:
+            return {}
+        steps = int(math.ceil(ini.equilibrate / self.stepping.dt_main))
+        dt_scheme = (self.dt, self.scheme)
+        damping = self.damping
+        self.dt, self.scheme = self.stepping.dt_main, SCHEME_NONE
+        self.damping = self.stiff.damping_coefficient(ini.equilibrate_damping, self.h)
+        stages = [s for s in self.stages if s.every == 1]
+        wall0 = time.perf_counter()
+        for _ in range(steps):
+            for stage in stages:
+                stage.run()
+        self.dt, self.scheme = dt_scheme
+        self.damping = damping
+        self.check_failure()
+        st = self.store
+        n = st.n_owned
+        speed = float(np.sqrt((st.v[:n] ** 2).sum(axis=1)).max()) if n else 0.0
+        speed = self.slabs.allreduce_max(speed)
+        st.v[:n] = 0.0
+        st.u[:n] = 0.0
+        st.acc[:n] = 0.0
+        self.equilibrium = {"seconds_simulated": steps * self.dt, "steps": steps,
+                "eta_d": ini.equilibrate_damping, "max_speed_at_end_m_s": speed,
+                "wall_s": time.perf_counter() - wall0}
+        return self.equilibrium
+
+    def check_failure(self) -> None:
+        """Collective: all ranks raise NumericalError if any rank saw a non-finite value."""
+        if self.slabs.any(self.failure is not None):
+            self.raise_failure()
+
+    def raise_failure(self) -> None:
+        """Collective, once some rank has failed: every rank raises the same error, naming
+        the earliest failure (lowest step, then rank)."""
+        info = self.slabs.comm.allgather(self.failure)
+        f = min((i for i in info if i is not None), key=lambda i: (i[0], i[3]))
+        raise NumericalError(f"step {f[0]}, t = {f[1]:.6g} s, particle id {f[2]} "
+                             f"(rank {f[3]}): field {f[4]}")

@@ -1,0 +1,300 @@
+"""The stages of one step of the pipeline (`Simulation` assembles them in
+`psph/solver/simulation.py`): exchange, ghosts, boundary rows, neighbours, the Shepard
+filter, the pair sweep, the symplectic kick, the projection, shifting and the update.
+Each stage works on the simulation's particle store and scratch arrays."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from psph.kernels.artificial_stress import artificial_stress
+from psph.kernels.ghosts import make_ghosts, wall_contact
+from psph.kernels.images import image_sums
+from psph.kernels.interactions import (
+    NSUMS,
+    pair_sums,
+    symmetric_gradient_sums,
+    velocity_gradient_sums,
+)
+from psph.kernels.neighbours import bin_particles, grid_bounds
+from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
+from psph.kernels.shifting import (
+    FREE_TRACE,
+    SHIFT_CAP,
+    SURFACE_TRACE,
+    shift_particles,
+)
+from psph.kernels.update import (
+    SCHEME_PROJECTION,
+    SCHEME_TPI,
+    advance,
+    kick,
+    pore_pressure_force,
+    porosity_follows_pressure_filter,
+    porosity_follows_stress_filter,
+)
+from psph.physics.loads import load_values
+from psph.state.particles import ParticleStore
+
+
+@dataclass
+class Stage:
+    """One named stage of a step; `seconds` accumulates its wall time on this rank."""
+
+    name: str
+    run: callable
+    every: int = 1  # run on steps that are multiples of this
+    seconds: float = 0.0
+    calls: int = 0
+
+
+
+class Stages:
+    """The stage methods of `Simulation` (its state is set up by `Simulation.__init__`)."""
+
+    def _reset_halo(self) -> None:
+        self.store.n_halo = self.store.n_ghost = 0
+
+    def _rebalance(self) -> None:
+        self.slabs.rebalance(self.store, self.halo,
+                             self.scene.decomposition.imbalance_threshold)
+
+    def _exchange(self) -> None:
+        self.slabs.exchange(self.store, self.halo)
+
+    @property
+    def v_slip(self) -> np.ndarray:
+        """Velocities with wall ghosts mirrored as on a free-slip wall (every row)."""
+        if self._v_slip is None:
+            return self.store.v
+        if self._v_slip.shape[0] < self.store.cap:
+            self._v_slip = np.zeros((self.store.cap, 2))
+        return self._v_slip
+
+    def _ghosts(self) -> None:
+        st = self.store
+        while True:
+            if self.ghost_src.shape[0] < st.cap:
+                self.ghost_src = np.zeros(st.cap, np.int64)
+                self.ghost_sign = np.ones(st.cap)
+            ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids),
+                             self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
+                             self.drainage.update_walls(self.t), st.x, st.v, self.v_slip,
+                             st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
+                             st.acc, st.key, self.head_b, self.body_force, self.ghost_src,
+                             self.ghost_sign)
+            if ng >= 0:
+                st.n_ghost = ng
+                return
+            st.ensure(2 * st.cap)
+
+    def _boundary_rows(self) -> None:
+        """Rows of the polyline boundary particles near this slab, after the ghosts."""
+        self.polylines.select(*self.slabs.slab)
+        while not self.polylines.append(self.store):
+            if len(self.wall_axis):  # the store grew: ghosts again (v_slip was reset)
+                self._ghosts()
+
+    def _boundary_state(self) -> None:
+        self.polylines.state(self.store, self.v_slip, self.head_b, self.cell_of,
+                             self.cell_start, self.order, self.ncell)
+
+    def _refresh_walls(self) -> None:
+        """Wall ghosts and boundary particles again from the current real rows."""
+        n_ghost = self.store.n_ghost  # the wall ghosts' count is unchanged
+        if len(self.wall_axis):
+            self._ghosts()
+        if self.polylines:
+            self.store.n_ghost = n_ghost
+            self._boundary_state()
+
+    def _neighbours(self) -> None:
+        st = self.store
+        n = st.n_total
+        if self.cell_of.shape[0] < st.cap:
+            self.cell_of = np.zeros(st.cap, np.int64)
+            self.order = np.zeros(st.cap, np.int64)
+            self.sums = np.zeros((st.cap, NSUMS))
+        grid_bounds(st.x, n, self.origin, self.cell_size, self.cell_max, self.grid_lo,
+                    self.ncell)
+        nc = int(self.ncell[0] * self.ncell[1])
+        if self.cell_start.shape[0] < nc + 1:
+            self.cell_start = np.zeros(2 * nc + 1, np.int64)
+            self.fill = np.zeros(2 * nc + 1, np.int64)
+        bin_particles(st.x, st.key, n, self.origin, self.cell_size, self.grid_lo, self.ncell,
+                      self.cell_of, self.cell_start, self.fill, self.order)
+
+    def _drained_planes(self) -> None:
+        """The free drained sides' planes at this step (collective)."""
+        self.drainage.update_planes(self.t, self.store, self.slabs)
+
+    def _shepard(self) -> None:
+        """Eq. (46) on owned particles, then the halo and ghosts again so that every copy
+        of a particle carries its filtered pressure (positions have not moved yet)."""
+        st = self.store
+        if self.scratch_moments.shape[0] < st.cap:
+            self.scratch_moments = np.zeros((st.cap, 18))
+            self.scratch_trace = np.zeros(st.cap)
+        mom = self.scratch_moments
+        stab = self.scene.stabilisation
+        s = self.soil
+        if stab.pressure_filter_porosity:
+            p_before = self.scratch_trace[:st.n_owned]
+            p_before[:] = st.p[:st.n_owned]
+        shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
+                         st.drained_from, self.drainage.layer_clock(self.t), self.cell_start,
+                         self.order, self.ncell,
+                         self.h, mom)
+        if stab.pressure_filter_porosity:
+            porosity_follows_pressure_filter(
+                st.n_owned, p_before, st.p, st.poro, st.poro0, st.vol, st.vol0, st.rho,
+                st.perm, s.rho_l, self.mat, st.material, s.K_l)
+        if stab.shepard_stress:
+            stress_filter = mls_stress if stab.stress_filter == "mls" else shepard_stress
+            if stab.stress_filter_porosity:
+                trace = self.scratch_trace[:st.n_owned]
+                np.sum(st.stress[:st.n_owned, :3], axis=1, out=trace)
+            stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
+                          self.order, self.ncell, self.h, mom)
+            if stab.stress_filter_porosity:
+                porosity_follows_stress_filter(
+                    st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
+                    st.perm, s.rho_l, self.mat, st.material)
+        last = "boundary_state" if self.polylines else "neighbours"
+        for stage in self.stages[:self.stages.index(self._stage(last)) + 1]:
+            if not stage.name.startswith("rebalance"):
+                stage.run()
+
+    def _stage(self, name: str) -> Stage:
+        return next(s for s in self.stages if s.name == name)
+
+    def _interactions(self) -> None:
+        st = self.store
+        rl = self.soil.rho_l
+        alpha = self.scene.pressure.alpha if self.scheme == SCHEME_TPI else 0.0
+        sb = self.scene.stabilisation
+        as_n = 0.0
+        if sb.artificial_stress > 0.0:
+            if self.astress.shape[0] < st.cap:
+                self.astress = np.zeros((st.cap, 3))
+            artificial_stress(st.n_total, st.stress, sb.artificial_stress, self.astress)
+            as_n = sb.artificial_stress_n
+        while True:
+            n = pair_sums(st.n_total, st.n_owned, st.n_real, st.x, st.v, self.v_slip,
+                          st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
+                          st.acc, self.cell_start, self.order, self.ncell, self.h, alpha,
+                          sb.av_alpha, sb.av_beta,
+                          self.av_sound_speed, rl * self.body[0], rl * self.body[1],
+                          self.coupled, self.acc_term, self.sums, self.astress, as_n,
+                          self.w_dx, self.p_weight, self.record_pairs, self.pairs,
+                          self.pair_g)
+            if n >= 0:
+                self.n_pairs = n
+                if self.coupled and self.drainage.has_planes:
+                    image_sums(st.n_owned, n, self.pairs, st.x, st.p, st.p_prev, st.vol,
+                               st.perm, self.drainage.planes, self.h, alpha, rl * self.body[0],
+                               rl * self.body[1], self.sums)
+                if self.coupled:
+                    self.sums[:st.n_owned, 14:19] *= self.lattice_norm
+                # the stress divergence of Eq. (26) has the same lattice moment: a
+                # uniform stress under a surface load balanced m0 q, not q (README)
+                self.sums[:st.n_owned, 23:25] *= self.lattice_norm
+                if self.p_weight < 1.0:
+                    pore_pressure_force(st.n_owned, self.sums, st.rho,
+                                        self.scene.pressure.momentum == "gradient",
+                                        self.lattice_norm, 1.0 - self.p_weight)
+                return
+            grow = 2 * self.pairs.shape[0]
+            self.pairs = np.zeros((grow, 2), np.int64)
+            self.pair_g = np.zeros((grow, 2))
+
+    def _kick(self) -> None:
+        """Symplectic step: v^(n+1) from the accelerations of step n, copied to the halo
+        and the wall ghosts, then the velocity sums again from v^(n+1)."""
+        st = self.store
+        load_values(self.scene.loads, self.t, self.load_value)
+        kick(st.n_owned, self.sums, st.v, st.acc, st.rho, st.vol, st.load_index, st.traction,
+             self.load_value, self.body[0], self.body[1], self.damping, self.dt)
+        self.slabs.refresh_halo(st.v)
+        self._refresh_walls()
+        velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g, st.v,
+                               self.v_slip, st.poro, st.vol, self.coupled, self.sums)
+
+    def _update(self) -> None:
+        st = self.store
+        s = self.soil
+        load_values(self.scene.loads, self.t, self.load_value)
+        bad = advance(st.n_owned, self.sums, st.x, st.u, st.v, st.stress, st.p, st.p_prev,
+                      st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
+                      st.drained_from, self.drainage.layer_clock(self.t), st.load_index,
+                      st.traction, self.load_value, self.dt,
+                      self.mat, st.material, s.K_l, s.gamma_l, s.rho_l, self.body[0],
+                      self.body[1], self.damping, self.scheme, self.scene.pressure.beta,
+                      self.acc_term,
+                      self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
+                      st.eps_p, self.softening.eps_hat if self.softening else st.eps_p,
+                      self.ponding, self.symplectic, st.plastic_work)
+        if bad >= 0 and self.failure is None:  # named before any wall moves it back
+            what = _bad_field(st, bad)
+            self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)
+        if self.scheme == SCHEME_PROJECTION and not self.symplectic:
+            st.acc[:st.n_owned] += self.pressure_solve.correction_acceleration()
+        if len(self.wall_axis):
+            wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
+                         self.wall_sign)
+        if self.polylines:
+            self.polylines.contact(st, self.origin, self.cell_size, self.grid_lo, self.ncell,
+                                   self.cell_start, self.order)
+
+    def _shift(self) -> None:
+        """Particle shifting (`stabilisation.shifting`, psph/kernels/shifting.py) over the
+        pairs and volumes of this step's sweep; the update that follows moves x by dt v
+        and puts back a particle found beyond a wall."""
+        st = self.store
+        if self.scratch_shift.shape[0] < st.cap:
+            self.scratch_shift = np.zeros((st.cap, 5))
+            self.scratch_shift[:, 4] = 0.5  # grad C_i = sum_j V_j (1/2 + 1/2) grad_i W_ij
+        half = self.scratch_shift[:, 4]
+        grad_c = self.scratch_shift[:, 0:2]
+        symmetric_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.vol,
+                                half, grad_c)
+        shift_particles(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
+                        SHIFT_CAP * self.scene.particles.dx, SURFACE_TRACE, FREE_TRACE,
+                        st.x, self.scratch_shift[:, 2:4])
+
+    def mass_balance_residual(self) -> float:
+        """`PressureSolve.residual` of this step (collective)."""
+        return self.pressure_solve.residual()
+
+    def _project(self) -> None:
+        """The pressure increment of the step from one solve of Eq. (29) with its velocity
+        correction (`PressureSolve.project`), then the halo and ghost copies and the
+        velocity sums of the corrected velocity. After the kick (symplectic step) or, in
+        the one-sweep step, of v^n from the step's sweep; the update then kicks with a^n
+        (README "The projection without the symplectic step"). Collective. Skipped while
+        another scheme is in force (the gravity loading of `equilibrate` holds p
+        hydrostatic)."""
+        if self.scheme != SCHEME_PROJECTION:
+            return
+        self.pressure_solve.project()
+        st = self.store
+        self.slabs.refresh_halo(st.v)
+        self.slabs.refresh_halo(st.p.reshape(-1, 1))
+        self.slabs.refresh_halo(st.p_prev.reshape(-1, 1))
+        self._refresh_walls()
+        velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g,
+                               st.v, self.v_slip, st.poro, st.vol, self.coupled, self.sums)
+
+
+def _bad_field(st: ParticleStore, i: int) -> str:
+    """Name and value of the first non-finite (or beyond 1e300) field of particle row i,
+    else a porosity outside (0, 1), else the position of a particle that left the domain."""
+    for name in ("p", "v", "stress", "x"):
+        value = np.asarray(st.arrays[name][i])
+        if not np.all(np.isfinite(value)):
+            return f"{name} = {value.tolist()} (not finite)"
+        if not np.all(np.abs(value) < 1e300):
+            return f"{name} = {value.tolist()} (diverged)"
+    if not 0.0 < st.poro[i] < 1.0:
+        return f"n = {st.poro[i]} (porosity outside (0, 1), Eq. 24)"
+    return f"x = {st.x[i].tolist()} (left the domain)"
