@@ -28,7 +28,7 @@ from annotated_types import Ge, Gt, Le, Lt, MaxLen, MinLen
 from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
-SCHEMA = "psph.scene:Scene"  # module:class of the root scene model
+SCHEMA = "psph.config.schema:Scene"  # module:class of the root scene model
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = Path(__file__).resolve().parents[1] / "reference" / "scene_keys.md"
