@@ -24,9 +24,14 @@ class _Model(BaseModel):
 class Boundary(_Model):
     """One side of the domain box: wall motion and pore-water flow condition."""
 
-    motion: Literal["free", "slip", "fixed"] = "free"
-    flow: Literal["impermeable", "drained"] = "impermeable"
-    drained_from: Annotated[float, Field(ge=0.0)] = 0.0  # s; before it the side is impermeable
+    motion: Literal["free", "slip", "fixed"] = Field(
+        "free", description="\"free\" (no wall), \"slip\" (free-slip wall) or \"fixed\" "
+        "(no slip)")
+    flow: Literal["impermeable", "drained"] = Field(
+        "impermeable", description="\"impermeable\" or \"drained\" (p = 0 on the side from "
+        "drained_from)")
+    drained_from: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Time a drained side starts to drain; impermeable before [s]")
 
 
 class Polyline(_Model):
@@ -40,12 +45,23 @@ class Polyline(_Model):
     "lattice" (on the soil's lattice, dx from its lowest row in every column,
     `polylines.lattice_particles`: for seeded soil at rest on a gently dipping line)."""
 
-    points: list[list[float]] | str
-    soil: Literal["above", "below", "left", "right"]
-    motion: Literal["fixed", "slip", "friction"] = "fixed"
-    friction_angle: float | None = None
-    drained: bool = False
-    rows: Literal["line", "lattice"] = "line"
+    points: list[list[float]] | str = Field(
+        description="Points [[x, z], ...] or a CSV path: a profile increasing in x, or a "
+        "wall increasing in z [m]")
+    soil: Literal["above", "below", "left", "right"] = Field(
+        description="Side the soil is on: \"above\"/\"below\" (profile) or "
+        "\"left\"/\"right\" (wall)")
+    motion: Literal["fixed", "slip", "friction"] = Field(
+        "fixed", description="\"fixed\" (no slip), \"slip\" (frictionless) or "
+        "\"friction\" (Coulomb)")
+    friction_angle: float | None = Field(
+        None, description="Wall friction angle φ_b, 0 ≤ φ_b < 90; required with and only "
+        "with motion = \"friction\" [deg]")
+    drained: bool = Field(False, description="true holds p = 0 on the line; false is "
+                          "impermeable")
+    rows: Literal["line", "lattice"] = Field(
+        "line", description="Boundary rows \"line\" ((k + ½) dx from the line) or "
+        "\"lattice\" (on the soil's lattice)")
 
 
 def points_of(line: Polyline, key: str = "polyline"):
@@ -61,11 +77,16 @@ def points_of(line: Polyline, key: str = "polyline"):
 
 
 class Boundaries(_Model):
-    left: Boundary = Boundary()
-    right: Boundary = Boundary()
-    bottom: Boundary = Boundary()
-    top: Boundary = Boundary()
-    polylines: list[Polyline] = []
+    left: Boundary = Field(Boundary(), description="Left side of the domain box, x = "
+                           "domain.min[0] (wall motion, flow)")
+    right: Boundary = Field(Boundary(), description="Right side of the domain box, x = "
+                            "domain.max[0] (wall motion, flow)")
+    bottom: Boundary = Field(Boundary(), description="Bottom side of the domain box, y = "
+                             "domain.min[1] (wall motion, flow)")
+    top: Boundary = Field(Boundary(), description="Top side of the domain box, y = "
+                          "domain.max[1] (wall motion, flow)")
+    polylines: list[Polyline] = Field([], description="Rigid polylines lined with boundary "
+                                      "particles (issue 16)")
 
     @model_validator(mode="after")
     def _polylines(self) -> "Boundaries":

@@ -26,52 +26,76 @@ class Regularisation(_Model):
     2 length; psph/kernels/nonlocal_strain.py). `length` is the internal length l_c in
     metres, a material property independent of dx; m = 1: the plain average."""
 
-    kind: Literal["nonlocal"]
-    length: Annotated[float, Field(gt=0.0)]  # l_c (m)
-    m: Annotated[float, Field(ge=1.0)] = 2.0  # over-non-local weight
+    kind: Literal["nonlocal"] = Field(description="Regularisation kind (only \"nonlocal\")")
+    length: Annotated[float, Field(gt=0.0)] = Field(
+        description="Internal length l_c, the smoothing length of the non-local average "
+        "(support 2 l_c), independent of dx [m]")
+    m: Annotated[float, Field(ge=1.0)] = Field(
+        2.0, description="Over-non-local weight m of eps_hat = (1 − m) eps_p + m eps_bar; 1 is "
+        "the plain average [-]")
 
 
 class Plasticity(_Model):
     """Drucker-Prager strain softening, Eq. (14)-(19). Angles in degrees, cohesion in Pa;
     residual values default to the peak ones (no softening)."""
 
-    phi: Annotated[float, Field(ge=0.0, lt=90.0)]  # peak friction angle phi_p
-    phi_r: Annotated[float, Field(ge=0.0, lt=90.0)] | None = None  # residual, Eq. (17)
-    c: Annotated[float, Field(ge=0.0)] = 0.0  # peak cohesion c_p
-    c_r: Annotated[float, Field(ge=0.0)] | None = None  # residual, Eq. (18)
-    psi: Annotated[float, Field(gt=-90.0, lt=90.0)] = 0.0  # initial dilation psi_0, Eq. (19)
-    eta: Annotated[float, Field(ge=0.0)] = 0.0  # softening rate of phi and c, Eq. (17)-(18)
-    s_f: Annotated[float, Field(ge=0.0)] = 0.0  # decay rate of dilation, Eq. (19)
-    regularisation: Regularisation | None = None  # None: the local law
-    # tension cut-off: the largest mean effective stress sigma'_m (Pa, tension positive)
-    # the soil carries (issue 13); None: the apex c cot(phi) of Eq. (14), the paper's law
-    tension_cutoff: Annotated[float, Field(ge=0.0)] | None = None
+    phi: Annotated[float, Field(ge=0.0, lt=90.0)] = Field(
+        description="Peak friction angle φ_p, Eq. (14) [deg]")
+    phi_r: Annotated[float, Field(ge=0.0, lt=90.0)] | None = Field(
+        None, description="Residual friction angle, Eq. (17); default phi [deg]")
+    c: Annotated[float, Field(ge=0.0)] = Field(0.0, description="Peak cohesion c_p [Pa]")
+    c_r: Annotated[float, Field(ge=0.0)] | None = Field(
+        None, description="Residual cohesion, Eq. (18); default c [Pa]")
+    psi: Annotated[float, Field(gt=-90.0, lt=90.0)] = Field(
+        0.0, description="Initial dilation angle ψ0, Eq. (19) [deg]")
+    eta: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Softening rate of φ and c with plastic strain, Eq. (17)–(18); 0 is "
+        "no softening [-]")
+    s_f: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Decay rate of the dilation angle, Eq. (19); 0 keeps ψ0 [-]")
+    regularisation: Regularisation | None = Field(
+        None, description="Non-local softening (issue 17); none keeps the local law")
+    # issue 13; none is the paper's law
+    tension_cutoff: Annotated[float, Field(ge=0.0)] | None = Field(
+        None, description="Largest mean effective stress σ'_m carried (tension positive); "
+        "none keeps the apex c cot φ of Eq. (14) [Pa]")
 
 
 class Material(_Model):
     """Saturated soil, linear elastic or elastic-plastic (Section 2.2; units Pa, kg/m^3,
     m/s)."""
 
-    model: Literal["elastic", "drucker_prager"] = "elastic"
-    plasticity: Plasticity | None = None  # required for model = "drucker_prager"
-    E: Pos
-    nu: Annotated[float, Field(gt=-1.0, lt=0.5)]
-    porosity: Annotated[float, Field(gt=0.0, lt=1.0)]
-    rho_s: Pos
-    rho_l: Pos = 1000.0
-    K_l: Pos = 1.0e9
-    k: Pos
-    g_ref: Pos = 9.81  # converts hydraulic conductivity k: gamma_l = rho_l g_ref
-    # Kozeny-Carman coefficient of Eq. (4), k = k exp((e - e0) / C_k); 0: constant k
-    C_k: Annotated[float, Field(ge=0.0)] = 0.0
-    # floor of the porosity of Eq. (24) (the densest state of the soil); 0: none
-    porosity_min: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.0
+    model: Literal["elastic", "drucker_prager"] = Field(
+        "elastic", description="Constitutive model: \"elastic\" or \"drucker_prager\"")
+    plasticity: Plasticity | None = Field(
+        None, description="Drucker–Prager parameters; required with model = "
+        "\"drucker_prager\", only with it")
+    E: Pos = Field(description="Young's modulus of the skeleton [Pa]")
+    nu: Annotated[float, Field(gt=-1.0, lt=0.5)] = Field(
+        description="Poisson's ratio of the skeleton [-]")
+    porosity: Annotated[float, Field(gt=0.0, lt=1.0)] = Field(
+        description="Initial porosity n0; must be above porosity_min [-]")
+    rho_s: Pos = Field(description="Density of the solid grains [kg/m^3]")
+    rho_l: Pos = Field(1000.0, description="Density of the pore water; equal in all "
+                       "materials [kg/m^3]")
+    K_l: Pos = Field(1.0e9, description="Bulk modulus of the pore water; equal in all "
+                     "materials [Pa]")
+    k: Pos = Field(description="Hydraulic conductivity at the initial void ratio [m/s]")
+    g_ref: Pos = Field(9.81, description="Gravity that converts k to a permeability, gamma_l "
+                       "= rho_l g_ref; equal in all materials [m/s^2]")
+    C_k: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Kozeny-Carman coefficient of Eq. (4), k = k0 exp((e − e0)/C_k); 0 "
+        "keeps k constant [-]")
+    # the densest state of the soil
+    porosity_min: Annotated[float, Field(ge=0.0, lt=1.0)] = Field(
+        0.0, description="Floor of the porosity of Eq. (24); 0 is no floor [-]")
 
 
 class NamedMaterial(Material):
     """One of several materials (`[[materials]]`): a `name` the particle sources use."""
 
-    name: Annotated[str, Field(min_length=1)]
+    name: Annotated[str, Field(min_length=1)] = Field(
+        description="Name that the particle sources use in `material = \"...\"`; unique")
 
 
 def check_material(m: Material, key: str) -> None:

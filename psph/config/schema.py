@@ -24,32 +24,38 @@ class _Model(BaseModel):
 class Domain(_Model):
     """The box bounded by the walls (m)."""
 
-    min: Vec2
-    max: Vec2
+    min: Vec2 = Field(description="Lower-left corner of the domain box [m]")
+    max: Vec2 = Field(description="Upper-right corner of the domain box; must exceed min [m]")
 
 
 class Block(_Model):
     """A rectangle of soil filled with particles on a square lattice."""
 
-    min: Vec2
-    max: Vec2
-    material: str | None = None  # a [[materials]] name; default: the first material
+    min: Vec2 = Field(description="Lower-left corner of the rectangle; its lattice starts "
+                      "here [m]")
+    max: Vec2 = Field(description="Upper-right corner of the rectangle; must exceed min [m]")
+    material: str | None = Field(None, description="Name of a [[materials]] table; default "
+                                 "the first material")
 
 
 class Polygon(_Model):
     """A polygon of soil (m): the lattice of the domain (spacing dx, anchored at
     domain.min) inside it is filled with particles."""
 
-    vertices: Annotated[list[Vec2], Field(min_length=3)]
-    material: str | None = None
+    vertices: Annotated[list[Vec2], Field(min_length=3)] = Field(
+        description="Polygon vertices [[x, y], ...], at least 3, inside the domain [m]")
+    material: str | None = Field(None, description="Name of a [[materials]] table; default "
+                                 "the first material")
 
 
 class MeshGeometry(_Model):
     """Soil from any mesh file meshio reads: particles on the domain lattice inside its
     triangles and quads (2D, x-y plane)."""
 
-    file: str
-    material: str | None = None
+    file: str = Field(description="Path of a mesh file meshio reads (2D triangles/quads in "
+                      "x-y)")
+    material: str | None = Field(None, description="Name of a [[materials]] table; default "
+                                 "the first material")
 
 
 class Layer(_Model):
@@ -57,18 +63,25 @@ class Layer(_Model):
     points with bottom(x) <= z <= top(x). Each profile is [[x, z], ...] strictly
     increasing in x, or the path of a CSV file of x, z rows (psph/geometry/profiles.py)."""
 
-    top: list[Vec2] | str
-    bottom: list[Vec2] | str
-    material: str | None = None
+    top: list[Vec2] | str = Field(description="Upper profile [[x, z], ...] strictly "
+                                  "increasing in x, or a CSV path [m]")
+    bottom: list[Vec2] | str = Field(description="Lower profile, nowhere above top, or a CSV "
+                                     "path [m]")
+    material: str | None = Field(None, description="Name of a [[materials]] table; default "
+                                 "the first material")
 
 
 class Particles(_Model):
-    dx: Pos
-    h_factor: Annotated[float, Field(ge=1.0, le=2.0)] = 1.2  # h = 1.2 dx (Section 3.1)
-    blocks: list[Block] = []
-    polygons: list[Polygon] = []
-    meshes: list[MeshGeometry] = []
-    layers: list[Layer] = []
+    dx: Pos = Field(description="Lattice spacing of the particles [m]")
+    h_factor: Annotated[float, Field(ge=1.0, le=2.0)] = Field(
+        1.2, description="Smoothing length over spacing, h = h_factor dx (Section 3.1) [-]")
+    blocks: list[Block] = Field([], description="Rectangles of soil, each on its own "
+                                "lattice from its min")
+    polygons: list[Polygon] = Field([], description="Polygons of soil on the domain lattice")
+    meshes: list[MeshGeometry] = Field([], description="Mesh files (meshio) whose cells are "
+                                       "filled with soil on the domain lattice")
+    layers: list[Layer] = Field([], description="Soil between two ground profiles of a "
+                                "cross-section, on the domain lattice")
 
 
 
@@ -76,174 +89,251 @@ class Particles(_Model):
 class Load(_Model):
     """Distributed normal pressure on the outer particle layer of one side (Pa)."""
 
-    side: Literal["left", "right", "bottom", "top"] = "top"
-    pressure: float
-    history: Literal["ramp", "harmonic"] = "ramp"
-    ramp: Annotated[float, Field(ge=0.0)] = 0.0  # s: linear rise to `pressure`, then hold
-    omega: Annotated[float, Field(ge=0.0)] = 0.0  # rad/s: pressure * (1 - cos(omega t))
-    range: Vec2 | None = None  # extent along the side (m); default: the whole side
+    side: Literal["left", "right", "bottom", "top"] = Field(
+        "top", description="Side of the box the pressure acts on")
+    pressure: float = Field(description="Normal pressure on the side's outer layer: held "
+                            "after the ramp, or the p of p (1 − cos ωt) [Pa]")
+    history: Literal["ramp", "harmonic"] = Field(
+        "ramp", description="Time history: \"ramp\" (rise, then hold) or \"harmonic\" "
+        "(p (1 − cos ωt))")
+    ramp: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Linear rise time to `pressure`, then hold; 0 is a step [s]")
+    omega: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Angular frequency ω of the harmonic load, p (1 − cos ωt) [rad/s]")
+    range: Vec2 | None = Field(None, description="Extent [from, to] along the side; default "
+                               "the whole side [m]")
 
 
 class Pressure(_Model):
     """Pore-pressure update: explicit Eq. (25), TPI Eq. (38)-(39), a projection (one
     linear solve of Eq. 29 per step, psph/kernels/projection.py), or none (dry)."""
 
-    scheme: Literal["tpi", "explicit", "projection", "none"] = "tpi"
-    alpha: Annotated[float, Field(ge=0.0, le=1.0)] = 0.5
-    R: Pos = 17.0  # TPI amplifier of the fluid time step, Eq. (40)
-    beta: Annotated[float, Field(ge=0.0)] = 0.0  # Eq. (47) for p < 0 (paper: 0.04); 0: off
-    explicit_until: Annotated[float, Field(ge=0.0)] = 0.0  # s: explicit Eq. (25) before this
-    acceleration_term: bool = False  # div(k dv/dt)/g of Eq. (25)/(36); see README
-    # free-surface particles: true: cannot hold positive pore pressure (ponding, Section
-    # 4.4); "drained": p = 0 there (atmospheric, no suction either); false: no condition
-    ponding: bool | Literal["drained"] = False
-    # projection: relative residual of the conjugate-gradient solve, and its iteration cap
-    tolerance: Annotated[float, Field(gt=0.0, lt=1.0)] = 1.0e-9
-    max_iterations: Annotated[int, Field(ge=1)] = 2000
-    # TPI: run a Delta t or alpha beyond the measured stability bound (`tpi_gain_limit`)
-    allow_unstable: bool = False
-    # where a drained side holds p = 0: "mirror" on its true surface (antisymmetric
-    # ghosts or images, psph/solver/drainage.py), "layer" on its outer particle layer, dx/2 inside
-    drained_boundary: Literal["mirror", "layer"] = "mirror"
-    # the pore pressure in Eq. (26): "pair" (the paper's), or from pressure differences,
-    # tried for issue 13 cause 12 and unstable at free corners (README); explicit/TPI only
-    momentum: Literal["pair", "difference", "gradient", "closure"] = "pair"
+    scheme: Literal["tpi", "explicit", "projection", "none"] = Field(
+        "tpi", description="Pore-pressure scheme: \"tpi\" (Eq. 38–39), \"explicit\" (Eq. 25), "
+        "\"projection\" (Eq. 29 solved) or \"none\" (dry)")
+    alpha: Annotated[float, Field(ge=0.0, le=1.0)] = Field(
+        0.5, description="TPI weight α of Eq. (39); above 0.75 needs pressure.allow_unstable "
+        "[-]")
+    R: Pos = Field(17.0, description="TPI step as a multiple of the fluid limit Eq. (42), "
+                   "Eq. (40); capped by Eq. (41) and TPI's gain bound [-]")
+    beta: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Storage β of Eq. (47) for p < 0; 0 is off (paper: 0.04) [-]")
+    explicit_until: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Time until which TPI scenes run explicit Eq. (25) (the loading "
+        "stage) [s]")
+    # see README
+    acceleration_term: bool = Field(False, description="Include div(k dv/dt)/g of "
+                                    "Eq. (25)/(36)")
+    # true: ponding, Section 4.4; "drained": atmospheric, no suction either
+    ponding: bool | Literal["drained"] = Field(
+        False, description="Free-surface condition: true p ≤ 0, \"drained\" p = 0, false none")
+    tolerance: Annotated[float, Field(gt=0.0, lt=1.0)] = Field(
+        1.0e-9, description="Relative residual of the projection's conjugate-gradient "
+        "solve [-]")
+    max_iterations: Annotated[int, Field(ge=1)] = Field(
+        2000, description="Iteration cap of the projection's conjugate-gradient solve")
+    # `tpi_gain_limit`, bench/verification/stability.py
+    allow_unstable: bool = Field(
+        False, description="Run beyond the measured stability checks: TPI with α above "
+        "0.75, a step above the gain bound or loading before any side drains; the "
+        "projection with time.integrator \"euler\"")
+    # antisymmetric ghosts or images, psph/solver/drainage.py
+    drained_boundary: Literal["mirror", "layer"] = Field(
+        "mirror", description="Where a drained side holds p = 0: \"mirror\" (its true "
+        "surface) or \"layer\" (outer particle layer, dx/2 inside)")
+    # the differences were tried for issue 13 cause 12 and are unstable at free corners
+    # (README)
+    momentum: Literal["pair", "difference", "gradient", "closure"] = Field(
+        "pair", description="Pore-pressure term of Eq. (26): \"pair\" (paper) or the "
+        "experimental \"difference\", \"gradient\", \"closure\"; explicit/TPI only")
 
 
 class Time(_Model):
-    end: Pos | None = None  # s; default: the last verification time
-    dt: Pos | None = None  # s; default: Eq. (40)-(42)
-    cfl_solid: Pos = 0.1  # C_CFL^s of Eq. (41)
-    cfl_fluid: Pos = 0.1  # C_CFL^l of Eq. (42)
-    allow_dt_above_solid_limit: bool = False
-    # "euler": one pair sweep, rates from v^n; "symplectic": kick v first, then a second
-    # (velocity-only) sweep gives the stress/pressure rates from v^(n+1), Eq. (27).
-    # Default: "symplectic" with pressure.scheme "projection" (the one-sweep step has no
-    # stable step with it, issue 39), "euler" otherwise
-    integrator: Literal["euler", "symplectic"] | None = None
+    end: Pos | None = Field(None, description="End time; default the last verification "
+                            "time [s]")
+    dt: Pos | None = Field(None, description="Time step; default from Eq. (40)–(42) [s]")
+    cfl_solid: Pos = Field(0.1, description="Courant number C_CFL^s of Eq. (41) [-]")
+    cfl_fluid: Pos = Field(0.1, description="Courant number C_CFL^l of Eq. (42) [-]")
+    allow_dt_above_solid_limit: bool = Field(
+        False, description="Allow time.dt above Eq. (41) and the explicit scheme's "
+        "undrained limit")
+    # the one-sweep step has no stable step with the projection (issue 39)
+    integrator: Literal["euler", "symplectic"] | None = Field(
+        None, description="\"euler\" (one pair sweep) or \"symplectic\" (kick, then a "
+        "velocity sweep, Eq. 27); default \"symplectic\" with the projection (which "
+        "refuses \"euler\"), \"euler\" otherwise")
 
 
 class Stabilisation(_Model):
-    damping: Annotated[float, Field(ge=0.0)] = 0.0  # eta_d of Eq. (44)
-    av_alpha: Annotated[float, Field(ge=0.0)] = 0.1  # artificial viscosity in C_ij, Eq. (26)
-    av_beta: Annotated[float, Field(ge=0.0)] = 0.1
-    # the viscosity's sound speed: "solid" sqrt(E / rho_s) of Eq. (41), or "undrained"
-    # c_sp of Eq. (28), the speed of the coupled mode the explicit Eq. (25) carries
-    av_sound_speed: Literal["solid", "undrained"] = "solid"
-    corrected_strain_rate: bool = False  # Eq. (22) correction in the stress rate; README
-    shepard_every: Annotated[int, Field(ge=0)] = 0  # m of Eq. (46): filter p every m steps
-    # particle shifting down the concentration gradient, A of D = A h^2 |grad v| dt
-    # (psph/kernels/shifting.py; issue 13, cause 12); 0: off
-    shifting: Annotated[float, Field(ge=0.0)] = 0.0
-    # with the Shepard step, also filter the effective stress (stress regularisation, the
-    # paper's ref. [14]): the odd-even mode of sigma' has no other damping (issue 13)
-    shepard_stress: bool = False
-    # the stress filter's kernel: "shepard" (zeroth order, Eq. 46's sum) or "mls" (first
-    # order, ref. [14]: linear stress fields kept, also at free surfaces)
-    stress_filter: Literal["shepard", "mls"] = "shepard"
-    # the porosity takes the elastic volumetric strain the stress filter moves, so that
-    # sigma' and n of Eq. (24) carry the same strain (issue 13: without it a debris-front
-    # particle compacted to n = 0.021 while the filter erased the stress that resisted it)
-    stress_filter_porosity: bool = True
-    # the porosity takes the strain the pressure filter (Eq. 46) moves, as if the filter
-    # were a strain and not an exchange of pore water between neighbours. A tried variant
-    # (issue 13, README cause 12), off: with ponding it is a ratchet at the free surface
-    # (the filter raises a surface particle's p and compacts it, the clip p <= 0 removes
-    # the p and keeps the compaction): K0 = 0.5 at 40 s, 365 particles below the flow
-    # rule's porosity bound against 83 without it
-    pressure_filter_porosity: bool = False
-    # artificial stress in C_ij of Eq. (26) (refs. [11, 18]): epsilon and exponent n;
-    # default epsilon: 0.5 for Drucker-Prager soil, 0 (off) for elastic
-    artificial_stress: Annotated[float, Field(ge=0.0)] | None = None
-    artificial_stress_n: Annotated[float, Field(gt=0.0)] = 2.55
+    damping: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Global damping ratio η_d of Eq. (44) [-]")
+    av_alpha: Annotated[float, Field(ge=0.0)] = Field(
+        0.1, description="Artificial viscosity α_Π in C_ij of Eq. (26) [-]")
+    av_beta: Annotated[float, Field(ge=0.0)] = Field(
+        0.1, description="Artificial viscosity β_Π in C_ij of Eq. (26) [-]")
+    # "undrained": the speed of the coupled mode the explicit Eq. (25) carries
+    av_sound_speed: Literal["solid", "undrained"] = Field(
+        "solid", description="Sound speed of the viscosity: \"solid\" sqrt(E/ρ_s) of Eq. (41) "
+        "or \"undrained\" (c_sp of Eq. 28)")
+    # README: the corrected shear rate excites a zig-zag mode at free surfaces
+    corrected_strain_rate: bool = Field(
+        False, description="Apply the Eq. (22) correction to the shear rate and spin too")
+    shepard_every: Annotated[int, Field(ge=0)] = Field(
+        0, description="Steps m between Shepard filters of p, Eq. (46); 0 is off")
+    # psph/kernels/shifting.py; issue 13, cause 12
+    shifting: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Particle-shifting coefficient A of D = A h^2 |grad v| dt; 0 is "
+        "off [-]")
+    # stress regularisation, the paper's ref. [14]: the odd-even mode of sigma' has no other
+    # damping (issue 13)
+    shepard_stress: bool = Field(
+        False, description="Also filter the effective stress in the Shepard step")
+    # "mls" keeps linear stress fields, also at free surfaces (ref. [14])
+    stress_filter: Literal["shepard", "mls"] = Field(
+        "shepard", description="Kernel of the stress filter: \"shepard\" (zeroth order, "
+        "Eq. 46) or \"mls\" (first order)")
+    # so that sigma' and n of Eq. (24) carry the same strain (issue 13: without it a
+    # debris-front particle compacted to n = 0.021 while the filter erased the stress that
+    # resisted it)
+    stress_filter_porosity: bool = Field(
+        True, description="Move the porosity by the elastic volumetric strain the stress "
+        "filter removes")
+    # as if the filter were a strain and not an exchange of pore water between neighbours.
+    # A tried variant (issue 13, README cause 12), off: with ponding it is a ratchet at the
+    # free surface (the filter raises a surface particle's p and compacts it, the clip
+    # p <= 0 removes the p and keeps the compaction): K0 = 0.5 at 40 s, 365 particles below
+    # the flow rule's porosity bound against 83 without it
+    pressure_filter_porosity: bool = Field(
+        False, description="Move the porosity by the strain the pressure filter (Eq. 46) "
+        "moves (experimental)")
+    # refs. [11, 18]
+    artificial_stress: Annotated[float, Field(ge=0.0)] | None = Field(
+        None, description="Artificial-stress ε in C_ij of Eq. (26); default 0.5 for "
+        "Drucker–Prager, 0 (off) for elastic [-]")
+    artificial_stress_n: Annotated[float, Field(gt=0.0)] = Field(
+        2.55, description="Exponent n of the artificial stress [-]")
 
 
 class Output(_Model):
-    times: list[Annotated[float, Field(ge=0.0)]] = []  # s
-    interval: Annotated[float, Field(ge=0.0)] = 0.0  # s; 0: only `times` and the end
-    history_interval: Pos = 1.0e-3  # s between diagnostics rows (settlement, energy)
-    # points (m) whose nearest particle's p and u go into history.csv as p_<name>, ...
-    probes: dict[str, Vec2] = {}
+    times: list[Annotated[float, Field(ge=0.0)]] = Field(
+        [], description="Times of extra snapshots [s]")
+    interval: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Time between snapshots; 0 keeps only `times` and the end [s]")
+    history_interval: Pos = Field(1.0e-3, description="Time between history.csv rows "
+                                  "(settlement, energy, probes) [s]")
+    probes: dict[str, Vec2] = Field(
+        {}, description="Named points whose nearest particle's p and u go into history.csv "
+        "as p_<name>, ... [m]")
 
 
 class Verification(_Model):
     # collapse: run-out, final height and back scarp in summary.json (psph.verify.collapse)
-    reference: Literal["none", "terzaghi", "harmonic", "strip_footing", "collapse"] = "none"
-    tv: list[Pos] = []  # time factors T_v at which to snapshot and compare
+    reference: Literal["none", "terzaghi", "harmonic", "strip_footing", "collapse"] = Field(
+        "none", description="Reference compared at the end: \"none\", \"terzaghi\", "
+        "\"harmonic\", \"strip_footing\", \"collapse\"")
+    tv: list[Pos] = Field([], description="Time factors T_v at which to snapshot and "
+                          "compare [-]")
 
 
 class Removal(_Model):
     """Particles inside a region at time `at` are removed from the run: the gate of a
     collapse, an excavated slope toe. The region is a box (min, max) or a polygon."""
 
-    at: Annotated[float, Field(ge=0.0)] = 0.0  # s
-    min: Vec2 | None = None
-    max: Vec2 | None = None
-    polygon: Annotated[list[Vec2], Field(min_length=3)] | None = None
+    at: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Time the region's particles are removed [s]")
+    min: Vec2 | None = Field(None, description="Lower-left corner of a box region (with "
+                             "max) [m]")
+    max: Vec2 | None = Field(None, description="Upper-right corner of a box region (with "
+                             "min) [m]")
+    polygon: Annotated[list[Vec2], Field(min_length=3)] | None = Field(
+        None, description="Vertices of a polygon region, at least 3 (instead of min/max) [m]")
 
 
 class Initial(_Model):
     """In-situ state at t = 0 (Section 4.4-4.5): hydrostatic pore pressure below a water
     table, and the K0 procedure for the effective stress under gravity."""
 
-    # m (elevation y): p = rho_l |g| (y_wt - y) below it; "surface": the water table
+    # a level (elevation y): p = rho_l |g| (y_wt - y) below it; "surface": the water table
     # follows the ground surface (p = rho_l |g| depth below the top of each column); a
-    # phreatic profile (issue 16): [[x, z], ...] or a CSV path, z_w(x) linear between its
-    # points and held at its end values beyond them; p = 0 above it
-    water_table: float | Literal["surface"] | list[Vec2] | str | None = None
-    k0: Annotated[float, Field(gt=0.0)] | None = None  # sigma'_h = K0 sigma'_v; none: zero
-    # s of gravity loading before t = 0 (Section 4.5): the skeleton relaxes from the K0
-    # state to equilibrium under free faces, with p held hydrostatic and global damping
-    # eta_d = equilibrate_damping (Eq. 43-44); then u = v = 0. 0: start from the K0 state
-    equilibrate: Annotated[float, Field(ge=0.0)] = 0.0
-    equilibrate_damping: Annotated[float, Field(gt=0.0)] = 0.1
-    # start from the undrained response to the (single, full-side, step) load of a
-    # laterally confined column: p0 = q / (1 + n M / K_l), sigma' = -(q - p0) along the
-    # load, nu / (1 - nu) of it across (psph/physics/initial.py), as GeoTaichi starts its
-    # Terzaghi column; the loading stage and its waves are then skipped
-    undrained_load: bool = False
+    # phreatic profile (issue 16): z_w(x) linear between its points and held at its end
+    # values beyond them; p = 0 above it
+    water_table: float | Literal["surface"] | list[Vec2] | str | None = Field(
+        None, description="Water table: a level, \"surface\", or a phreatic profile "
+        "[[x, z], ...]/CSV; hydrostatic p below it; none: p = 0 [m]")
+    k0: Annotated[float, Field(gt=0.0)] | None = Field(
+        None, description="Earth-pressure coefficient, σ'_h = K0 σ'_v; none leaves zero "
+        "effective stress [-]")
+    # Section 4.5: the skeleton relaxes from the K0 state to equilibrium under free faces,
+    # with global damping (Eq. 43-44); then u = v = 0
+    equilibrate: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Gravity loading before t = 0 with p held hydrostatic; 0 starts "
+        "from the K0 state [s]")
+    equilibrate_damping: Annotated[float, Field(gt=0.0)] = Field(
+        0.1, description="Damping ratio η_d during the gravity loading [-]")
+    # of a laterally confined column: p0 = q / (1 + n M / K_l), sigma' = -(q - p0) along
+    # the load, nu / (1 - nu) of it across (psph/physics/initial.py), as GeoTaichi starts
+    # its Terzaghi column; the loading stage and its waves are then skipped
+    undrained_load: bool = Field(
+        False, description="Start from the undrained response to the single full-side step "
+        "load")
 
 
 class Decomposition(_Model):
-    axis: Literal["auto", "x", "y"] = "auto"
-    # every this many steps the work imbalance (max/mean particles per rank) is measured;
-    # 0: never (the slabs stay as cut at the start)
-    rebalance_every: Annotated[int, Field(ge=0)] = 200
-    # recut the slabs when the imbalance exceeds this
-    imbalance_threshold: Annotated[float, Field(gt=1.0)] = 1.05
+    axis: Literal["auto", "x", "y"] = Field(
+        "auto", description="Slab axis: \"auto\" (the domain's longer side), \"x\" or \"y\"")
+    rebalance_every: Annotated[int, Field(ge=0)] = Field(
+        200, description="Steps between imbalance checks; 0 is never (the slabs stay as "
+        "cut at the start)")
+    imbalance_threshold: Annotated[float, Field(gt=1.0)] = Field(
+        1.05, description="Max/mean particles per rank above which the slabs are recut [-]")
 
 
 class Checkpoint(_Model):
     """Restart state in OUT/checkpoint.h5 (replaced atomically)."""
 
-    every: Annotated[int, Field(ge=0)] = 0  # steps between checkpoints; 0: by wall time only
-    wall_seconds: Annotated[float, Field(ge=0.0)] = 1800.0  # wall s between them; 0: off
-    at_end: bool = True  # also write one when the run finishes
+    every: Annotated[int, Field(ge=0)] = Field(
+        0, description="Steps between checkpoints; 0 is by wall time only")
+    wall_seconds: Annotated[float, Field(ge=0.0)] = Field(
+        1800.0, description="Wall time between checkpoints; 0 is off [s]")
+    at_end: bool = Field(True, description="Also write a checkpoint when the run finishes")
 
 
 class Scene(_Model):
-    name: str
-    description: str = ""
-    dim: Literal[2] = 2
-    gravity: Vec2 = [0.0, 0.0]
-    domain: Domain
-    particles: Particles
-    # one material (index 0), or several by name (issue 16, psph/config/materials.py); with
-    # [[materials]], `material` is set to the first of them after validation (the fluid's
-    # constants and the references read it) and left out of the dump
-    material: Material | None = None
-    materials: list[NamedMaterial] = []
-    boundaries: Boundaries = Boundaries()
-    loads: list[Load] = []
-    pressure: Pressure = Pressure()
-    time: Time = Time()
-    stabilisation: Stabilisation = Stabilisation()
-    output: Output = Output()
-    verification: Verification = Verification()
-    initial: Initial = Initial()
-    remove: list[Removal] = []
-    decomposition: Decomposition = Decomposition()
-    checkpoint: Checkpoint = Checkpoint()
+    name: str = Field(description="Scene name; the default output directory is runs/<name>")
+    description: str = Field("", description="One line describing the scene (printed by "
+                             "`psph list`)")
+    dim: Literal[2] = Field(2, description="Spatial dimension (only 2, plane strain)")
+    gravity: Vec2 = Field([0.0, 0.0], description="Gravitational acceleration [g_x, g_y]; "
+                          "along −y for initial.k0 and water_table [m/s^2]")
+    domain: Domain = Field(description="The box bounded by the walls")
+    particles: Particles = Field(description="Particle spacing, smoothing length and the soil "
+                                 "sources")
+    # with [[materials]], `material` is set to the first of them after validation (the
+    # fluid's constants and the references read it) and left out of the dump
+    material: Material | None = Field(
+        None, description="The single material (index 0); give it or [[materials]], not "
+        "both")
+    materials: list[NamedMaterial] = Field(
+        [], description="Several named materials (issue 16), picked by each source's "
+        "`material`")
+    boundaries: Boundaries = Field(Boundaries(), description="The four box sides and the "
+                                   "polyline boundaries")
+    loads: list[Load] = Field([], description="Distributed normal pressures on the box sides")
+    pressure: Pressure = Field(Pressure(), description="Pore-pressure scheme and its "
+                               "parameters")
+    time: Time = Field(Time(), description="End time, step and integrator")
+    stabilisation: Stabilisation = Field(Stabilisation(), description="Damping, viscosity, "
+                                         "filters and shifting")
+    output: Output = Field(Output(), description="Snapshot times, history interval and "
+                           "probes")
+    verification: Verification = Field(Verification(), description="Reference solution "
+                                       "compared at the end of the run")
+    initial: Initial = Field(Initial(), description="In-situ state at t = 0")
+    remove: list[Removal] = Field([], description="Regions of soil removed at given times")
+    decomposition: Decomposition = Field(Decomposition(), description="Slab axis and load "
+                                         "balancing")
+    checkpoint: Checkpoint = Field(Checkpoint(), description="When restart checkpoints are "
+                                   "written")
 
     @model_validator(mode="after")
     def _consistent(self) -> "Scene":
