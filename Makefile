@@ -55,7 +55,7 @@ scene-%: env
 	$(VPY) -m psph plot runs/$*
 
 # the import layers of pyproject.toml [tool.importlinter] first: seconds, before the suites
-test: layers test-serial test-mpi
+test: layers docs test-serial test-mpi docs-check
 
 layers: env
 	$(VENV)/bin/lint-imports

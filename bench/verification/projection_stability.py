@@ -182,7 +182,11 @@ def main() -> None:
     OUT.mkdir(exist_ok=True)
     stem = "projection_stability" + ("-only" if args.only else "-full" if args.full else "")
     if args.plot_only:
-        rows = json.loads((OUT / f"{stem}.json").read_text())["rows"]
+        final, partial = OUT / f"{stem}.json", OUT / f"{stem}.partial.jsonl"
+        if final.exists():
+            rows = json.loads(final.read_text())["rows"]
+        else:  # a sweep still running or stopped: its rows so far
+            rows = [json.loads(line) for line in partial.read_text().splitlines()]
         for r in rows:
             r["stable"] = stable(r)
     else:
@@ -210,7 +214,7 @@ def main() -> None:
             indent=1))
     print(table(rows))
     plot(rows, OUT / f"{stem}.png")
-    print(f"wrote {OUT / stem}.json and .png")
+    print(f"wrote {OUT / stem}.png" + ("" if args.plot_only else " and .json"))
 
 
 if __name__ == "__main__":
