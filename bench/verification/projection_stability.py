@@ -20,7 +20,8 @@ tests' size) and "geotaichi" (`terzaghi_undrained`: GeoTaichi's start, dx = 0.02
     .venv/bin/python bench/verification/projection_stability.py --only 'ci|geotaichi' --jobs 2
     .venv/bin/python bench/verification/projection_stability.py --plot-only
 
-Prints a table, writes bench/out/projection_stability[-only|-full].json and .png.
+Prints a table, writes bench/out/projection_stability[-only|-full].json, .png and .md (the
+docs' table).
 """
 
 import argparse
@@ -148,6 +149,20 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def markdown(rows: list[dict]) -> str:
+    """The table for the docs (docs/vv/projection_stability.md)."""
+    lines = ["| column | integrator | f | ranks | dt (s) | outcome | max error / q | "
+             "p max / q | p min / q | wall s | exit 3 at |", "|---" * 11 + "|"]
+    for r in rows:
+        err = "–" if r["error"] is None else f"{r['error']:.4f}"
+        lines.append(
+            f"| {r['column']} | {r['integrator']} | {r['factor']:g} | {r['ranks']} | "
+            f"{r['dt']:.3g} | {'runs' if r['stable'] else '**fails**'} | {err} | "
+            f"{r['p_max'] / Q:.3g} | {r['p_min'] / Q:.3g} | {r['wall_s']:.0f} | "
+            f"{r['failure'] or '–'} |")
+    return "\n".join(lines) + "\n"
+
+
 def plot(rows: list[dict], path: Path) -> None:
     import matplotlib
 
@@ -214,7 +229,8 @@ def main() -> None:
             indent=1))
     print(table(rows))
     plot(rows, OUT / f"{stem}.png")
-    print(f"wrote {OUT / stem}.png" + ("" if args.plot_only else " and .json"))
+    (OUT / f"{stem}.md").write_text(markdown(rows))
+    print(f"wrote {OUT / stem}.png, .md" + ("" if args.plot_only else " and .json"))
 
 
 if __name__ == "__main__":
