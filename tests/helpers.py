@@ -4,8 +4,9 @@ from pathlib import Path
 
 import numpy as np
 
-from psph.kernels.interactions import NSUMS, pair_sums
+from psph.kernels.interactions import pair_sums
 from psph.kernels.neighbours import cell_lists  # noqa: F401  (tests import it from here)
+from psph.kernels.sum_columns import MOMENT, NSUMS
 
 
 def jittered_lattice(n: int, dx: float, jitter: float, seed: int = 1) -> np.ndarray:
@@ -43,7 +44,7 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
 
 
 def inverse_moment(s):
-    m = s[:, 0:4].reshape(-1, 2, 2)
+    m = s[:, MOMENT].reshape(-1, 2, 2)
     return np.linalg.inv(m)
 
 

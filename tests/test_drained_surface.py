@@ -9,6 +9,7 @@ from helpers import sums_for
 from psph.kernels.ghosts import make_ghosts
 from psph.kernels.images import image_sums, image_weights
 from psph.kernels.laplacian import apply_operator, lattice_moment, pair_weights
+from psph.kernels.sum_columns import DARCY, DVDT_Y, GP, M_XX, M_YY, MOMENT, SUM_A, SUM_AP, Q
 
 DX = 0.1
 H = 1.2 * DX
@@ -31,10 +32,10 @@ def _laplacian(x, p, planes):
     s, n_pairs = sums_for(x, H, vol, p=p, pairs=pairs)
     image_sums(n, n_pairs, pairs[0], x, p, p.copy(), vol, np.ones(n), planes, H, 0.0, 0.0,
                0.0, s)
-    s[:, 14:19] /= lattice_moment(DX, H)
-    m = s[:, 0:4].reshape(-1, 2, 2)
-    grad = np.einsum("in,inm->im", s[:, 8:10], np.linalg.inv(m))
-    return s[:, 17] - p * s[:, 16] - np.sum(grad * s[:, 14:16], axis=1)
+    s[:, DARCY] /= lattice_moment(DX, H)
+    m = s[:, MOMENT].reshape(-1, 2, 2)
+    grad = np.einsum("in,inm->im", s[:, GP], np.linalg.inv(m))
+    return s[:, SUM_AP] - p * s[:, SUM_A] - np.sum(grad * s[:, Q], axis=1)
 
 
 def test_lattice_moment_is_the_interior_moment_matrix():
@@ -42,8 +43,8 @@ def test_lattice_moment_is_the_interior_moment_matrix():
     x = _column()
     s = sums_for(x, H, np.full(len(x), DX * DX))
     inner = np.all((x > 3 * H) & (x < 1.2 - 3 * H), axis=1) & (x[:, 1] < TOP - 3 * H)
-    assert np.allclose(s[inner, 0], lattice_moment(DX, H), rtol=1e-12)
-    assert np.allclose(s[inner, 3], lattice_moment(DX, H), rtol=1e-12)
+    assert np.allclose(s[inner, M_XX], lattice_moment(DX, H), rtol=1e-12)
+    assert np.allclose(s[inner, M_YY], lattice_moment(DX, H), rtol=1e-12)
     assert lattice_moment(DX, H) == pytest.approx(0.99079, abs=1e-5)
 
 
@@ -101,7 +102,7 @@ def test_operator_with_images_is_symmetric_positive_definite_and_matches_the_sum
         apply_operator(n, n_pairs, pr, wd, wo, vol, storage, fixed, e, S[:, j])
     assert np.allclose(S, S.T, rtol=0, atol=1e-13 * np.abs(S).max())
     assert np.linalg.eigvalsh(S).min() > 0.0
-    assert np.allclose(-(S @ q) / vol, s[:, 17] - q * s[:, 16], rtol=1e-10, atol=1e-10)
+    assert np.allclose(-(S @ q) / vol, s[:, SUM_AP] - q * s[:, SUM_A], rtol=1e-10, atol=1e-10)
 
 
 def test_correction_images_pin_the_operator_at_the_plane_before_it_drains():
@@ -184,12 +185,12 @@ def test_uniform_stress_balances_the_surface_load_with_the_lattice_moment():
     stress = np.zeros((n, 4))
     stress[:, 1] = -q
     s = sums_for(x, H, np.full(n, DX * DX), stress=stress, rho=np.ones(n))
-    force = s[:, 24] * DX * DX / lattice_moment(DX, H)  # per particle, rho = 1
+    force = s[:, DVDT_Y] * DX * DX / lattice_moment(DX, H)  # per particle, rho = 1
     inner = (x[:, 0] > 3 * H) & (x[:, 0] < 1.2 - 3 * H)
     column = inner & np.isclose(x[:, 0], x[inner, 0].min())
     surface = column & (x[:, 1] > TOP - 2 * H)
     assert force[surface].sum() == pytest.approx(q * DX, rel=1e-3)
-    assert s[surface, 24].sum() * DX * DX == pytest.approx(lattice_moment(DX, H) * q * DX,
+    assert s[surface, DVDT_Y].sum() * DX * DX == pytest.approx(lattice_moment(DX, H) * q * DX,
                                                              rel=1e-3)
     below = column & (x[:, 1] < TOP - 2 * H) & (x[:, 1] > 3 * H)
     assert np.allclose(force[below], 0.0, atol=1e-9 * q * DX)

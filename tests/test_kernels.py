@@ -7,6 +7,7 @@ import pytest
 from helpers import inverse_moment, jittered_lattice, sums_for
 
 from psph.kernels.spline import dw_cubic, w_cubic
+from psph.kernels.sum_columns import DVDT, GP, GV, M_XX, M_XY, SUM_A, SUM_AP, Q
 
 
 def test_kernel_normalised_and_smooth():
@@ -45,8 +46,8 @@ def test_corrected_gradient_exact_for_linear_fields(jitter):
     p = 4.0 * x[:, 0] - 7.0 * x[:, 1] + 1.0
     s = sums_for(x, h, vol, v=v, p=p)
     minv = inverse_moment(s)
-    grad_p = np.einsum("in,inm->im", s[:, 8:10], minv)
-    grad_v = np.einsum("ian,inb->iab", s[:, 4:8].reshape(-1, 2, 2), minv)
+    grad_p = np.einsum("in,inm->im", s[:, GP], minv)
+    grad_v = np.einsum("ian,inb->iab", s[:, GV].reshape(-1, 2, 2), minv)
     assert np.allclose(grad_p, [4.0, -7.0], atol=1e-9)
     assert np.allclose(grad_v, [[0.3, -1.2], [2.0, 0.5]], atol=1e-9)
 
@@ -62,8 +63,8 @@ def test_second_derivative_of_quadratic_eq23():
                             (2 * x[:, 0] - x[:, 1], 0.0)):
         s = sums_for(x, h, vol, p=field)
         minv = inverse_moment(s)
-        grad = np.einsum("in,inm->im", s[:, 8:10], minv)
-        lap = s[:, 17] - field * s[:, 16] - np.sum(grad * s[:, 14:16], axis=1)
+        grad = np.einsum("in,inm->im", s[:, GP], minv)
+        lap = s[:, SUM_AP] - field * s[:, SUM_A] - np.sum(grad * s[:, Q], axis=1)
         inner = np.all((x > 3 * h) & (x < 30 * dx - 3 * h), axis=1)
         if expected == 0.0:
             assert np.allclose(lap, 0.0, atol=1e-8)
@@ -98,5 +99,5 @@ def test_pair_loop_matches_brute_force():
                             [stress[i, 3] + stress[j, 3],
                              stress[i, 1] + stress[j, 1] - p[i] - p[j]]])
             ref[i, 2:4] += vol[j] * sig @ g / rho[i]
-    assert np.allclose(s[:, 0:2], ref[:, 0:2], rtol=1e-12, atol=1e-12)
-    assert np.allclose(s[:, 23:25], ref[:, 2:4], rtol=1e-10, atol=1e-10)
+    assert np.allclose(s[:, M_XX:M_XY + 1], ref[:, 0:2], rtol=1e-12, atol=1e-12)
+    assert np.allclose(s[:, DVDT], ref[:, 2:4], rtol=1e-10, atol=1e-10)

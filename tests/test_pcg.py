@@ -12,6 +12,7 @@ import pytest
 
 from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, exact_total, local_parts
 from psph.kernels.laplacian import apply_operator, fixed_rhs, operator_diagonal, pair_weights
+from psph.kernels.sum_columns import SUM_A, SUM_AP
 from psph.solver.pcg import PCGWork, pcg
 from tests.helpers import jittered_lattice, sums_for
 
@@ -63,8 +64,8 @@ def test_laplacian_weights_are_the_tpi_sums():
         s_a[b] += vol[a] * w[k]
         s_aq[a] += vol[b] * w[k] * q[b]
         s_aq[b] += vol[a] * w[k] * q[a]
-    assert np.allclose(s_a, sums[:, 16], rtol=1e-12)
-    assert np.allclose(s_aq, sums[:, 17], rtol=1e-12, atol=1e-12 * np.abs(s_aq).max())
+    assert np.allclose(s_a, sums[:, SUM_A], rtol=1e-12)
+    assert np.allclose(s_aq, sums[:, SUM_AP], rtol=1e-12, atol=1e-12 * np.abs(s_aq).max())
 
 
 @pytest.mark.parametrize("storage", [0.0, 50.0])

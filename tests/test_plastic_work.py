@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from psph.kernels.interactions import NSUMS
+from psph.kernels.sum_columns import GV, M_XX, M_YY, NSUMS
 from psph.kernels.update import SCHEME_NONE, advance
 from psph.physics.material import material_row
 
@@ -23,9 +23,8 @@ def _drive(grad: np.ndarray, steps: int, dt: float, dp: np.ndarray | None) -> di
     """One particle whose corrected velocity gradient is `grad` (L[a, b] = dv_a/dx_b) for
     `steps` steps of dt; returns the stress after each step, eps_p and plastic_work."""
     sums = np.zeros((1, NSUMS))
-    sums[0, 0] = sums[0, 3] = 1.0  # identity moment matrix: no correction
-    sums[0, 4], sums[0, 5], sums[0, 6], sums[0, 7] = grad[0, 0], grad[0, 1], grad[1, 0], \
-        grad[1, 1]
+    sums[0, M_XX] = sums[0, M_YY] = 1.0  # identity moment matrix: no correction
+    sums[0, GV] = grad.ravel()  # GV_XX, GV_XY, GV_YX, GV_YY: row-major
     z = np.zeros
     x, u, v, acc = z((1, 2)), z((1, 2)), z((1, 2)), z((1, 2))
     stress = np.array([[SIGMA0, SIGMA0, SIGMA0, 0.0]])

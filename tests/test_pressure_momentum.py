@@ -4,6 +4,7 @@
 import numpy as np
 from helpers import jittered_lattice, sums_for
 
+from psph.kernels.sum_columns import DVDT
 from psph.kernels.update import pore_pressure_force
 
 
@@ -12,7 +13,7 @@ def _pressure_acceleration(x, p, rho, p_weight, dx, h):
     sums = sums_for(x, h, np.full(n, dx * dx), p=p, rho=rho, p_weight=p_weight)
     if p_weight == 0.0:
         pore_pressure_force(n, sums, rho, True, 1.0, 1.0)
-    return sums[:, 23:25]
+    return sums[:, DVDT]
 
 
 def test_gradient_form_is_exact_for_a_hydrostatic_field_on_a_disordered_lattice():

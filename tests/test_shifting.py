@@ -5,6 +5,7 @@ from helpers import jittered_lattice, sums_for
 
 from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.shifting import FREE_TRACE, SURFACE_TRACE, shift_particles
+from psph.kernels.sum_columns import M_XX, M_YY
 
 DX, H = 0.1, 0.12
 
@@ -84,7 +85,7 @@ def test_free_surface_particles_stay_and_the_next_row_shifts_along_the_surface()
     before = x.copy()
     shift = _shift(x, coef=200.0)
     sums, _ = _grad_c(before)
-    trace = sums[:, 0] + sums[:, 3]
+    trace = sums[:, M_XX] + sums[:, M_YY]
     middle = (before[:, 0] > 3 * H) & (before[:, 0] < 1.2 - 3 * H)
     top = (trace < FREE_TRACE) & (before[:, 1] > 1.0) & middle
     second = (trace >= FREE_TRACE) & (trace < SURFACE_TRACE) & (before[:, 1] > 1.0) & middle

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from psph.kernels.ghosts import make_ghosts
+from psph.kernels.sum_columns import GN, GS, GV, GV_XY
 from tests.helpers import inverse_moment, sums_for
 
 DX = 0.1
@@ -47,12 +48,12 @@ def _gradient(g, sums):
 def test_a_block_sliding_on_a_wall_does_not_stretch(fixed):
     sums, x = _block_on_wall(fixed, (5.0, 0.0))
     # Gv + Gs: the velocity gradient with the ghosts' free-slip mirror velocity
-    stretch = _gradient(sums[:, 4:8] + sums[:, 25:29], sums)
+    stretch = _gradient(sums[:, GV] + sums[:, GS], sums)
     div_v = stretch[:, 0, 0] + stretch[:, 1, 1]
     # rigid translation: no volume change anywhere, the block's front corner included
     assert np.abs(div_v).max() < 1e-9
     # Eq. (24): the porosity rate of a rigid motion is zero too
-    gn = _gradient(sums[:, 10:14], sums)
+    gn = _gradient(sums[:, GN], sums)
     assert np.abs(gn[:, 0, 0] + gn[:, 1, 1]).max() < 1e-9
 
 
@@ -60,20 +61,20 @@ def test_a_fixed_wall_still_resists_sliding_by_shear():
     sums, x = _block_on_wall(True, (5.0, 0.0))
     bottom = x[:, 1] < DX
     # the plain shear rate du/dy of the bottom row sees the no-slip ghosts (-v)
-    du_dy = sums[bottom, 5]
+    du_dy = sums[bottom, GV_XY]
     assert (du_dy > 0.5 * 5.0 / DX).all()
     # the no-slip velocity gradient itself stretches the block's corners: this is what
     # Eq. (24)-(25) took before the Gs columns (run-away suction at a debris front)
-    full = _gradient(sums[:, 4:8], sums)
+    full = _gradient(sums[:, GV], sums)
     front = bottom & (x[:, 0] > 1.1)
     assert (full[front, 0, 0] + full[front, 1, 1] > 1.0 / DX).all()
 
 
 def test_free_slip_ghosts_need_no_stretching_correction():
     sums, _ = _block_on_wall(False, (5.0, -1.0))
-    assert not sums[:, 25:29].any()
+    assert not sums[:, GS].any()
     sums, _ = _block_on_wall(True, (5.0, -1.0))
-    assert sums[:, 25:29].any()
+    assert sums[:, GS].any()
 
 
 @pytest.mark.parametrize("drained", [False, True])

@@ -18,10 +18,12 @@ tests' size) and "geotaichi" (`terzaghi_undrained`: GeoTaichi's start, dx = 0.02
     .venv/bin/python bench/verification/projection_stability.py --jobs 2         # ~30 min
     .venv/bin/python bench/verification/projection_stability.py --full --jobs 2  # hours
     .venv/bin/python bench/verification/projection_stability.py --only 'ci|geotaichi' --jobs 2
-    .venv/bin/python bench/verification/projection_stability.py --plot-only
+    .venv/bin/python bench/verification/projection_stability.py --plot-only   # the record
 
-Prints a table, writes bench/out/projection_stability[-only|-full].json, .png and .md (the
-docs' table).
+Finished cases are appended to docs/data/projection_stability.jsonl (committed), so a
+stopped sweep resumes, on this machine or another, and the docs' table is built from every
+recorded row. Prints the table, writes bench/out/projection_stability.json, .png and .md
+(the docs' table).
 """
 
 import argparse
@@ -41,6 +43,7 @@ from psph.config.load import load_scene
 from psph.physics.limits import solid_dt_limit
 
 OUT = Path(__file__).resolve().parents[1] / "out"
+RECORD = Path(__file__).resolve().parents[2] / "docs" / "data" / "projection_stability.jsonl"
 Q = 1.0e4
 FACTORS = (0.25, 0.5, 1.0, 1.5, 2.0)
 COLUMNS = {  # cheapest first
@@ -190,47 +193,41 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--only", help="regular expression over the case labels")
     ap.add_argument("--jobs", type=int, default=1)
-    ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--plot-only", action="store_true",
+                    help="the table and picture from the record, running nothing")
     ap.add_argument("--full", action="store_true", help="every factor on 1 and 2 ranks")
-    ap.add_argument("--fresh", action="store_true", help="forget the rows of a stopped sweep")
+    ap.add_argument("--record", type=Path, default=RECORD,
+                    help="the rows measured so far, one JSON line per case (default: the "
+                         "docs' record, so that a sweep resumes on any machine)")
     args = ap.parse_args()
     OUT.mkdir(exist_ok=True)
-    stem = "projection_stability" + ("-only" if args.only else "-full" if args.full else "")
-    if args.plot_only:
-        final, partial = OUT / f"{stem}.json", OUT / f"{stem}.partial.jsonl"
-        if final.exists():
-            rows = json.loads(final.read_text())["rows"]
-        else:  # a sweep still running or stopped: its rows so far
-            rows = [json.loads(line) for line in partial.read_text().splitlines()]
-        for r in rows:
-            r["stable"] = stable(r)
-    else:
+    done = {}
+    if args.record.exists():
+        for line in args.record.read_text().splitlines():
+            r = json.loads(line)
+            done[r["label"]] = r
+    if not args.plot_only:
         todo = [c for c in cases(args.full) if not args.only or re.search(args.only, c["label"])]
-        # finished rows are kept case by case, so that a stopped sweep resumes
-        partial = OUT / f"{stem}.partial.jsonl"
-        if args.fresh:
-            partial.unlink(missing_ok=True)
-        done = {}
-        if partial.exists():
-            for line in partial.read_text().splitlines():
-                r = json.loads(line)
-                done[r["label"]] = r
         rest = [c for c in todo if c["label"] not in done]
-        print(f"{len(todo) - len(rest)} of {len(todo)} cases from {partial}", flush=True)
-        with ThreadPoolExecutor(args.jobs) as pool, partial.open("a") as log:
+        print(f"{len(todo) - len(rest)} of {len(todo)} cases in {args.record}", flush=True)
+        with ThreadPoolExecutor(args.jobs) as pool, args.record.open("a") as log:
             for r in pool.map(run_case, rest):
+                r["recorded"] = f"{date.today().isoformat()} on {platform.node()}"
                 done[r["label"]] = r
                 log.write(json.dumps(r) + "\n")
                 log.flush()
                 print(table([r]).splitlines()[-1], flush=True)
-        rows = [done[c["label"]] for c in todo]
-        (OUT / f"{stem}.json").write_text(json.dumps(
-            {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows},
-            indent=1))
+    order = {c["label"]: i for i, c in enumerate(cases(full=True))}
+    rows = sorted(done.values(), key=lambda r: order.get(r["label"], len(order)))
+    for r in rows:
+        r["stable"] = stable(r)
+    (OUT / "projection_stability.json").write_text(json.dumps(
+        {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows},
+        indent=1))
     print(table(rows))
-    plot(rows, OUT / f"{stem}.png")
-    (OUT / f"{stem}.md").write_text(markdown(rows))
-    print(f"wrote {OUT / stem}.png, .md" + ("" if args.plot_only else " and .json"))
+    plot(rows, OUT / "projection_stability.png")
+    (OUT / "projection_stability.md").write_text(markdown(rows))
+    print(f"wrote {OUT}/projection_stability.json, .png, .md (every recorded row)")
 
 
 if __name__ == "__main__":

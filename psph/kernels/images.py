@@ -23,17 +23,24 @@ import numba as nb
 import numpy as np
 
 from psph.kernels.spline import dw_cubic
+from psph.kernels.sum_columns import (
+    Q_X,
+    Q_Y,
+    SUM_A,
+    SUM_AP,
+    SUM_APSI,
+)
 
 
 @nb.njit(cache=True, inline="always")
 def _add_image(s, vol_j, kbar, f2, p_image, d0, d1, rho_l_b0, rho_l_b1):
     """One image neighbour at x_i + (d0, d1) with pressure p_image into row s."""
     aij = vol_j * kbar * f2
-    s[14] += vol_j * d0 * f2
-    s[15] += vol_j * d1 * f2
-    s[16] += aij
-    s[17] += aij * p_image
-    s[18] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
+    s[Q_X] += vol_j * d0 * f2
+    s[Q_Y] += vol_j * d1 * f2
+    s[SUM_A] += aij
+    s[SUM_AP] += aij * p_image
+    s[SUM_APSI] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
 
 
 @nb.njit(cache=True, inline="always")

@@ -4,22 +4,11 @@ Each pair (a, b) with |x_a - x_b| < 2h is visited once (half stencil over the ce
 and contributes to both particles. The corrected gradient Eq. (22) needs the inverse of the
 moment matrix M_i = sum_j V_j (x_j - x_i) (x) grad_i W_ij, which is only known after the
 sweep; since the correction is linear, the sweep accumulates raw sums and `update.py`
-applies M_i^-1 afterwards. Columns of `sums` (one row per particle):
-
-  0-3   M[m, n]  = sum V_j r_ji^m  dW^n                     moment matrix, Eq. (22)
-  4-7   Gv[a, n] = sum V_j (v_j - v_i)^a dW^n               velocity gradient, Eq. (22)
-  8-9   Gp[n]    = sum V_j (p_j - p_i) dW^n                 pressure gradient, Eq. (22)
-  10-13 Gn[a, n] = sum V_j (1 - n_j)(v_j - v_i)^a dW^n      porosity rate, Eq. (24)*
-  14-15 Q[m]     = sum V_j r_ji^m 2F_ij                     correction moment, Eq. (23)
-  16    sA       = sum A_ij,  A_ij = V_j kbar_ij 2F_ij      Eq. (33) (trace of D^mn is 2)
-  17    sAp      = sum A_ij p~_j,  p~ = p + alpha (p - p_prev)   Eq. (38)-(39)
-  18    sApsi    = sum A_ij (psi_j - psi_i),  psi = -rho_l b.x   elevation head, Eq. (25)
-  19-22 Ga[a, n] = sum V_j (k_j a_j - k_i a_i)^a dW^n       div(k dv/dt), Eq. (25)/(36)
-  23-24 dvdt     = sum V_j (sigma_i + sigma_j)/rho_i . dW - sum m_j Pi_ij dW  Eq. (26)
-  25-28 Gs[a, n] = sum V_j (vs_j - vs_i - v_j + v_i)^a dW^n  stretching correction*
-
-with dW = grad_i W_ij (Eq. 21), F_ij = r_ji . grad_i W_ij / |r_ji|^2 and sigma the total
-stress sigma' - p I (Eq. 2). Only rows of owned particles (index < n_owned) are written.
+applies M_i^-1 afterwards. The columns of `sums` (one row per particle) are named in
+`sum_columns.py`: the moment matrix M, the velocity, pressure and porosity-rate gradients
+GV, GP, GN (Eq. 22, 24), the Darcy sums Q, SUM_A, SUM_AP, SUM_APSI (Eq. 23, 33, 38), the
+div(k dv/dt) sums GA, the stress divergence DVDT (Eq. 26) and the wall stretching
+correction GS. Only rows of owned particles (index < n_owned) are written.
 
 * Rows n_real.. are wall ghosts. On them `v_slip` (vs) holds the velocity mirrored as on
 a free-slip wall, where `v` holds -v on a fixed (no-slip) wall. Gn takes vs, and
@@ -46,8 +35,38 @@ import numba as nb
 
 from psph.kernels.neighbours import half_stencil
 from psph.kernels.spline import dw_cubic, w_cubic
-
-NSUMS = 29
+from psph.kernels.sum_columns import (
+    DVDT_X,
+    DVDT_Y,
+    GA_XX,
+    GA_XY,
+    GA_YX,
+    GA_YY,
+    GN_XX,
+    GN_XY,
+    GN_YX,
+    GN_YY,
+    GP_X,
+    GP_Y,
+    GS_XX,
+    GS_XY,
+    GS_YX,
+    GS_YY,
+    GV_XX,
+    GV_XY,
+    GV_YX,
+    GV_YY,
+    M_XX,
+    M_XY,
+    M_YX,
+    M_YY,
+    NSUMS,
+    Q_X,
+    Q_Y,
+    SUM_A,
+    SUM_AP,
+    SUM_APSI,
+)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -148,89 +167,89 @@ def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, v
                             dpsi = -(rho_l_b0 * dx0 + rho_l_b1 * dx1)
                         if own_a:
                             s = sums[a]
-                            s[0] += vb * dx0 * g0
-                            s[1] += vb * dx0 * g1
-                            s[2] += vb * dx1 * g0
-                            s[3] += vb * dx1 * g1
-                            s[4] += vb * dv0 * g0
-                            s[5] += vb * dv0 * g1
-                            s[6] += vb * dv1 * g0
-                            s[7] += vb * dv1 * g1
+                            s[M_XX] += vb * dx0 * g0
+                            s[M_XY] += vb * dx0 * g1
+                            s[M_YX] += vb * dx1 * g0
+                            s[M_YY] += vb * dx1 * g1
+                            s[GV_XX] += vb * dv0 * g0
+                            s[GV_XY] += vb * dv0 * g1
+                            s[GV_YX] += vb * dv1 * g0
+                            s[GV_YY] += vb * dv1 * g1
                             if ghost_pair:
-                                s[25] += vb * (ds0 - dv0) * g0
-                                s[26] += vb * (ds0 - dv0) * g1
-                                s[27] += vb * (ds1 - dv1) * g0
-                                s[28] += vb * (ds1 - dv1) * g1
-                            s[23] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
-                            s[24] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
+                                s[GS_XX] += vb * (ds0 - dv0) * g0
+                                s[GS_XY] += vb * (ds0 - dv0) * g1
+                                s[GS_YX] += vb * (ds1 - dv1) * g0
+                                s[GS_YY] += vb * (ds1 - dv1) * g1
+                            s[DVDT_X] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
+                            s[DVDT_Y] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
                             if coupled:
-                                s[8] += vb * dp * g0
-                                s[9] += vb * dp * g1
+                                s[GP_X] += vb * dp * g0
+                                s[GP_Y] += vb * dp * g1
                                 wn = vb * (1.0 - poro[b])
-                                s[10] += wn * ds0 * g0
-                                s[11] += wn * ds0 * g1
-                                s[12] += wn * ds1 * g0
-                                s[13] += wn * ds1 * g1
-                                s[14] += vb * dx0 * f2
-                                s[15] += vb * dx1 * f2
+                                s[GN_XX] += wn * ds0 * g0
+                                s[GN_XY] += wn * ds0 * g1
+                                s[GN_YX] += wn * ds1 * g0
+                                s[GN_YY] += wn * ds1 * g1
+                                s[Q_X] += vb * dx0 * f2
+                                s[Q_Y] += vb * dx1 * f2
                                 aab = vb * kbar * f2
-                                s[16] += aab
-                                s[17] += aab * ptb
-                                s[18] += aab * dpsi
+                                s[SUM_A] += aab
+                                s[SUM_AP] += aab * ptb
+                                s[SUM_APSI] += aab * dpsi
                         if own_b:
                             s = sums[b]
-                            s[0] += va * dx0 * g0
-                            s[1] += va * dx0 * g1
-                            s[2] += va * dx1 * g0
-                            s[3] += va * dx1 * g1
-                            s[4] += va * dv0 * g0
-                            s[5] += va * dv0 * g1
-                            s[6] += va * dv1 * g0
-                            s[7] += va * dv1 * g1
+                            s[M_XX] += va * dx0 * g0
+                            s[M_XY] += va * dx0 * g1
+                            s[M_YX] += va * dx1 * g0
+                            s[M_YY] += va * dx1 * g1
+                            s[GV_XX] += va * dv0 * g0
+                            s[GV_XY] += va * dv0 * g1
+                            s[GV_YX] += va * dv1 * g0
+                            s[GV_YY] += va * dv1 * g1
                             if ghost_pair:
-                                s[25] += va * (ds0 - dv0) * g0
-                                s[26] += va * (ds0 - dv0) * g1
-                                s[27] += va * (ds1 - dv1) * g0
-                                s[28] += va * (ds1 - dv1) * g1
-                            s[23] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
-                            s[24] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
+                                s[GS_XX] += va * (ds0 - dv0) * g0
+                                s[GS_XY] += va * (ds0 - dv0) * g1
+                                s[GS_YX] += va * (ds1 - dv1) * g0
+                                s[GS_YY] += va * (ds1 - dv1) * g1
+                            s[DVDT_X] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
+                            s[DVDT_Y] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
                             if coupled:
-                                s[8] += va * dp * g0
-                                s[9] += va * dp * g1
+                                s[GP_X] += va * dp * g0
+                                s[GP_Y] += va * dp * g1
                                 wn = va * (1.0 - poro[a])
-                                s[10] += wn * ds0 * g0
-                                s[11] += wn * ds0 * g1
-                                s[12] += wn * ds1 * g0
-                                s[13] += wn * ds1 * g1
-                                s[14] -= va * dx0 * f2
-                                s[15] -= va * dx1 * f2
+                                s[GN_XX] += wn * ds0 * g0
+                                s[GN_XY] += wn * ds0 * g1
+                                s[GN_YX] += wn * ds1 * g0
+                                s[GN_YY] += wn * ds1 * g1
+                                s[Q_X] -= va * dx0 * f2
+                                s[Q_Y] -= va * dx1 * f2
                                 aba = va * kbar * f2
-                                s[16] += aba
-                                s[17] += aba * pta
-                                s[18] -= aba * dpsi
+                                s[SUM_A] += aba
+                                s[SUM_AP] += aba * pta
+                                s[SUM_APSI] -= aba * dpsi
                         if acc_term and coupled:
                             ka0 = perm[b] * acc[b, 0] - perm[a] * acc[a, 0]
                             ka1 = perm[b] * acc[b, 1] - perm[a] * acc[a, 1]
                             if own_a:
                                 s = sums[a]
-                                s[19] += vb * ka0 * g0
-                                s[20] += vb * ka0 * g1
-                                s[21] += vb * ka1 * g0
-                                s[22] += vb * ka1 * g1
+                                s[GA_XX] += vb * ka0 * g0
+                                s[GA_XY] += vb * ka0 * g1
+                                s[GA_YX] += vb * ka1 * g0
+                                s[GA_YY] += vb * ka1 * g1
                             if own_b:
                                 s = sums[b]
-                                s[19] += va * ka0 * g0
-                                s[20] += va * ka0 * g1
-                                s[21] += va * ka1 * g0
-                                s[22] += va * ka1 * g1
+                                s[GA_XX] += va * ka0 * g0
+                                s[GA_XY] += va * ka0 * g1
+                                s[GA_YX] += va * ka1 * g0
+                                s[GA_YY] += va * ka1 * g1
     return n_pairs if n_pairs <= cap_pairs else -1
 
 
 @nb.njit(cache=True, error_model="numpy")
 def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, poro, vol, coupled,
                            sums):
-    """Recompute only the velocity sums Gv (columns 4-7), Gs (25-28) and, if `coupled`,
-    Gn (10-13) of owned particles from the current `v` and `v_slip` (rows n_real..:
+    """Recompute only the velocity sums GV, GS and, if `coupled`,
+    GN of owned particles from the current `v` and `v_slip` (rows n_real..:
     wall ghosts), over the pairs `pair_sums` recorded (same positions, same order, so
     the sums are as partition-independent as pair_sums').
 
@@ -240,12 +259,12 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
     pressure projection after its velocity correction (`Simulation._project`).
     """
     for i in range(n_owned):
-        for c in range(4, 8):
+        for c in range(GV_XX, GV_YY + 1):
             sums[i, c] = 0.0
-        for c in range(25, 29):
+        for c in range(GS_XX, GS_YY + 1):
             sums[i, c] = 0.0
         if coupled:
-            for c in range(10, 14):
+            for c in range(GN_XX, GN_YY + 1):
                 sums[i, c] = 0.0
     for k in range(n_pairs):
         a = pairs[k, 0]
@@ -263,39 +282,39 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
         if a < n_owned:
             s = sums[a]
             vb = vol[b]
-            s[4] += vb * dv0 * g0
-            s[5] += vb * dv0 * g1
-            s[6] += vb * dv1 * g0
-            s[7] += vb * dv1 * g1
+            s[GV_XX] += vb * dv0 * g0
+            s[GV_XY] += vb * dv0 * g1
+            s[GV_YX] += vb * dv1 * g0
+            s[GV_YY] += vb * dv1 * g1
             if ghost_pair:
-                s[25] += vb * (ds0 - dv0) * g0
-                s[26] += vb * (ds0 - dv0) * g1
-                s[27] += vb * (ds1 - dv1) * g0
-                s[28] += vb * (ds1 - dv1) * g1
+                s[GS_XX] += vb * (ds0 - dv0) * g0
+                s[GS_XY] += vb * (ds0 - dv0) * g1
+                s[GS_YX] += vb * (ds1 - dv1) * g0
+                s[GS_YY] += vb * (ds1 - dv1) * g1
             if coupled:
                 wn = vb * (1.0 - poro[b])
-                s[10] += wn * ds0 * g0
-                s[11] += wn * ds0 * g1
-                s[12] += wn * ds1 * g0
-                s[13] += wn * ds1 * g1
+                s[GN_XX] += wn * ds0 * g0
+                s[GN_XY] += wn * ds0 * g1
+                s[GN_YX] += wn * ds1 * g0
+                s[GN_YY] += wn * ds1 * g1
         if b < n_owned:
             s = sums[b]
             va = vol[a]
-            s[4] += va * dv0 * g0
-            s[5] += va * dv0 * g1
-            s[6] += va * dv1 * g0
-            s[7] += va * dv1 * g1
+            s[GV_XX] += va * dv0 * g0
+            s[GV_XY] += va * dv0 * g1
+            s[GV_YX] += va * dv1 * g0
+            s[GV_YY] += va * dv1 * g1
             if ghost_pair:
-                s[25] += va * (ds0 - dv0) * g0
-                s[26] += va * (ds0 - dv0) * g1
-                s[27] += va * (ds1 - dv1) * g0
-                s[28] += va * (ds1 - dv1) * g1
+                s[GS_XX] += va * (ds0 - dv0) * g0
+                s[GS_XY] += va * (ds0 - dv0) * g1
+                s[GS_YX] += va * (ds1 - dv1) * g0
+                s[GS_YY] += va * (ds1 - dv1) * g1
             if coupled:
                 wn = va * (1.0 - poro[a])
-                s[10] += wn * ds0 * g0
-                s[11] += wn * ds0 * g1
-                s[12] += wn * ds1 * g0
-                s[13] += wn * ds1 * g1
+                s[GN_XX] += wn * ds0 * g0
+                s[GN_XY] += wn * ds0 * g1
+                s[GN_YX] += wn * ds1 * g0
+                s[GN_YY] += wn * ds1 * g1
 
 
 @nb.njit(cache=True)

@@ -23,6 +23,25 @@ import numba as nb
 import numpy as np
 
 from psph.kernels.interactions import symmetric_gradient_sums
+from psph.kernels.sum_columns import (
+    GP_X,
+    GP_Y,
+    GS_XX,
+    GS_XY,
+    GS_YX,
+    GS_YY,
+    GV_XX,
+    GV_XY,
+    GV_YX,
+    GV_YY,
+    M_XX,
+    M_YY,
+    Q_X,
+    Q_Y,
+    SUM_A,
+    SUM_AP,
+    SUM_APSI,
+)
 from psph.kernels.update import _inverse_moment
 
 
@@ -38,13 +57,13 @@ def projection_rhs(n_owned: int, sums: np.ndarray, p: np.ndarray, perm: np.ndarr
     for i in range(n_owned):
         s = sums[i]
         m00, m01, m10, m11 = _inverse_moment(s)
-        div_v = ((s[4] + s[25]) * m00 + (s[5] + s[26]) * m10
-                 + (s[6] + s[27]) * m01 + (s[7] + s[28]) * m11)
-        gp0 = s[8] * m00 + s[9] * m10
-        gp1 = s[8] * m01 + s[9] * m11
-        e_i = perm[i] * (gp0 * s[14] + gp1 * s[15])
-        head = s[18] + perm[i] * rho_l * (b0 * s[14] + b1 * s[15])
-        lap = s[17] - p[i] * s[16] - e_i + head
+        div_v = ((s[GV_XX] + s[GS_XX]) * m00 + (s[GV_XY] + s[GS_XY]) * m10
+                 + (s[GV_YX] + s[GS_YX]) * m01 + (s[GV_YY] + s[GS_YY]) * m11)
+        gp0 = s[GP_X] * m00 + s[GP_Y] * m10
+        gp1 = s[GP_X] * m01 + s[GP_Y] * m11
+        e_i = perm[i] * (gp0 * s[Q_X] + gp1 * s[Q_Y])
+        head = s[SUM_APSI] + perm[i] * rho_l * (b0 * s[Q_X] + b1 * s[Q_Y])
+        lap = s[SUM_AP] - p[i] * s[SUM_A] - e_i + head
         storage[i] = poro[i] / (bulk_water * dt)
         rhs[i] = vol[i] * (lap / gamma_l - div_v)
 
@@ -57,7 +76,7 @@ def imposed_increments(n_owned: int, sums: np.ndarray, drained_from: np.ndarray,
     `advance`), else (0, 0)."""
     for i in range(n_owned):
         s = sums[i]
-        if drained_from[i] <= t or (drained_surface and s[0] + s[3] < 1.5):
+        if drained_from[i] <= t or (drained_surface and s[M_XX] + s[M_YY] < 1.5):
             out[i, 0] = 1.0
             out[i, 1] = -p[i]
         else:

@@ -10,8 +10,38 @@ import math
 
 import numba as nb
 
-from psph.kernels.interactions import NSUMS  # noqa: F401  (column layout documented there)
 from psph.kernels.plasticity import dp_return
+from psph.kernels.sum_columns import (
+    DVDT_X,
+    DVDT_Y,
+    GA_XX,
+    GA_XY,
+    GA_YX,
+    GA_YY,
+    GN_XX,
+    GN_XY,
+    GN_YX,
+    GN_YY,
+    GP_X,
+    GP_Y,
+    GS_XX,
+    GS_XY,
+    GS_YX,
+    GS_YY,
+    GV_XX,
+    GV_XY,
+    GV_YX,
+    GV_YY,
+    M_XX,
+    M_XY,
+    M_YX,
+    M_YY,
+    Q_X,
+    Q_Y,
+    SUM_A,
+    SUM_AP,
+    SUM_APSI,
+)
 
 SCHEME_NONE = 0
 SCHEME_EXPLICIT = 1
@@ -39,11 +69,11 @@ MAT_COLUMNS = MAT_DP + 10
 def _inverse_moment(s):
     """Inverse of the 2x2 moment matrix (row-major m00, m01, m10, m11); identity (no
     correction) where it is near-singular, e.g. a particle with too few neighbours."""
-    det = s[0] * s[3] - s[1] * s[2]
+    det = s[M_XX] * s[M_YY] - s[M_XY] * s[M_YX]
     if abs(det) < 1e-3:
         return 1.0, 0.0, 0.0, 1.0
     inv = 1.0 / det
-    return s[3] * inv, -s[1] * inv, -s[2] * inv, s[0] * inv
+    return s[M_YY] * inv, -s[M_XY] * inv, -s[M_YX] * inv, s[M_XX] * inv
 
 
 @nb.njit(cache=True, inline="always")
@@ -80,8 +110,8 @@ def _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1, 
               dt):
     """dv/dt of Eq. (45): Eq. (26) (sums 23-24) + body force + damping Eq. (43)-(44) +
     surface tractions; stored in acc and applied to v."""
-    a0 = s[23] + b0 - damping * v[i, 0]
-    a1 = s[24] + b1 - damping * v[i, 1]
+    a0 = s[DVDT_X] + b0 - damping * v[i, 0]
+    a1 = s[DVDT_Y] + b1 - damping * v[i, 1]
     li = int(load_index[i])
     if li >= 0:
         mass = rho[i] * vol[i]
@@ -170,11 +200,11 @@ def pore_pressure_force(n_owned, sums, rho, corrected, norm, share):
         s = sums[i]
         if corrected:
             m00, m01, m10, m11 = _inverse_moment(s)
-            s[23] -= share * (s[8] * m00 + s[9] * m10) / rho[i]
-            s[24] -= share * (s[8] * m01 + s[9] * m11) / rho[i]
+            s[DVDT_X] -= share * (s[GP_X] * m00 + s[GP_Y] * m10) / rho[i]
+            s[DVDT_Y] -= share * (s[GP_X] * m01 + s[GP_Y] * m11) / rho[i]
         else:
-            s[23] -= share * norm * s[8] / rho[i]
-            s[24] -= share * norm * s[9] / rho[i]
+            s[DVDT_X] -= share * norm * s[GP_X] / rho[i]
+            s[DVDT_Y] -= share * norm * s[GP_Y] / rho[i]
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -230,12 +260,12 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
         # velocity gradient L[a, b] = dv_a/dx_b = G[a, n] Minv[n, b]   (Eq. 22): the
         # stretching (diagonal) from Gv + Gs, the shear from Gv (interactions.py: a fixed
         # wall resists shear, not stretching along itself)
-        gs00 = s[4] + s[25]
-        gs11 = s[7] + s[28]
-        l00 = gs00 * m00 + (s[5] + s[26]) * m10
-        l01 = s[4] * m01 + s[5] * m11
-        l10 = s[6] * m00 + s[7] * m10
-        l11 = (s[6] + s[27]) * m01 + gs11 * m11
+        gs00 = s[GV_XX] + s[GS_XX]
+        gs11 = s[GV_YY] + s[GS_YY]
+        l00 = gs00 * m00 + (s[GV_XY] + s[GS_XY]) * m10
+        l01 = s[GV_XX] * m01 + s[GV_XY] * m11
+        l10 = s[GV_YX] * m00 + s[GV_YY] * m10
+        l11 = (s[GV_YX] + s[GS_YX]) * m01 + gs11 * m11
         div_v = l00 + l11
         if not correct_strain:
             # shear rate and spin from the plain kernel gradient (Bui et al. 2008): the
@@ -245,8 +275,8 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
             # surfaces, corners) the plain div v is about half the corrected one, the two
             # phases disagreed on how much the soil expanded, and suction grew at sheared
             # corners (issue 13; README)
-            l01 = s[5]
-            l10 = s[6]
+            l01 = s[GV_XY]
+            l10 = s[GV_YX]
             if scheme == SCHEME_NONE:
                 # dry: no pore water to agree with, and the corrected normal rates let a
                 # block that lands on a fixed floor eject free-surface particles
@@ -280,35 +310,35 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
 
         if scheme != SCHEME_NONE:
             # porosity rate, Eq. (24): trace(Gn Minv)
-            dn = s[10] * m00 + s[11] * m10 + s[12] * m01 + s[13] * m11
+            dn = s[GN_XX] * m00 + s[GN_XY] * m10 + s[GN_YX] * m01 + s[GN_YY] * m11
             # corrected pressure gradient (Eq. 22) and the Eq. (23) correction term
-            gp0 = s[8] * m00 + s[9] * m10
-            gp1 = s[8] * m01 + s[9] * m11
-            q0 = s[14]
-            q1 = s[15]
+            gp0 = s[GP_X] * m00 + s[GP_Y] * m10
+            gp1 = s[GP_X] * m01 + s[GP_Y] * m11
+            q0 = s[Q_X]
+            q1 = s[Q_Y]
             e_i = perm[i] * (gp0 * q0 + gp1 * q1)
             # elevation head: div(k grad psi), psi = -rho_l b.x, with the same correction
-            head = s[18] + perm[i] * rho_l * (b0 * q0 + b1 * q1)
+            head = s[SUM_APSI] + perm[i] * rho_l * (b0 * q0 + b1 * q1)
             div_ka = 0.0
             if acc_term:
-                div_ka = s[19] * m00 + s[20] * m10 + s[21] * m01 + s[22] * m11
+                div_ka = s[GA_XX] * m00 + s[GA_XY] * m10 + s[GA_YX] * m01 + s[GA_YY] * m11
             if drained_from[i] <= t:
                 p[i] = 0.0
                 p_prev[i] = 0.0
             elif scheme == SCHEME_EXPLICIT:
-                lap = s[17] - p[i] * s[16] - e_i + head  # div(k grad(p + psi)), Eq. (23)
+                lap = s[SUM_AP] - p[i] * s[SUM_A] - e_i + head  # div(k grad(p + psi)), Eq. (23)
                 rate = bulk_water / poro[i] * (lap / gamma_l - div_v + inv_g * div_ka)
                 p_prev[i] = p[i]
                 p[i] += dt * rate
             elif scheme == SCHEME_PROJECTION:
                 pass  # p and p_prev were set by the pressure solve
-            elif s[16] > 0.0:
-                # TPI, Eq. (38) with B of Eq. (36); s[17] holds sum A_ij p_j^(t+alpha)
+            elif s[SUM_A] > 0.0:
+                # TPI, Eq. (38) with B of Eq. (36); s[SUM_AP] holds sum A_ij p_j^(t+alpha)
                 b_i = -gamma_l * div_v + head + rho_l * div_ka - e_i
-                p_new = tpi_pressure(b_i, s[16], s[17], p[i], beta, dt)
+                p_new = tpi_pressure(b_i, s[SUM_A], s[SUM_AP], p[i], beta, dt)
                 p_prev[i] = p[i]
                 p[i] = p_new
-            if ponding > 0 and s[0] + s[3] < 1.5 and (p[i] > 0.0 or ponding == 2):
+            if ponding > 0 and s[M_XX] + s[M_YY] < 1.5 and (p[i] > 0.0 or ponding == 2):
                 # a free-surface particle (kernel support < 3/4 full: trace of the moment
                 # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure, nor
                 # any when drained

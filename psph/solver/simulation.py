@@ -18,9 +18,9 @@ from psph.decomposition.census import Census
 from psph.errors import NumericalError
 from psph.geometry.lattice import extent, seed
 from psph.geometry.shapes import inside_polygon
-from psph.kernels.interactions import NSUMS
 from psph.kernels.laplacian import lattice_moment
 from psph.kernels.spline import w_cubic
+from psph.kernels.sum_columns import NSUMS
 from psph.kernels.update import (
     SCHEME_EXPLICIT,
     SCHEME_NONE,

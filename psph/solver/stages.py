@@ -11,7 +11,6 @@ from psph.kernels.artificial_stress import artificial_stress
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.images import image_sums
 from psph.kernels.interactions import (
-    NSUMS,
     pair_sums,
     symmetric_gradient_sums,
     velocity_gradient_sums,
@@ -24,6 +23,7 @@ from psph.kernels.shifting import (
     SURFACE_TRACE,
     shift_particles,
 )
+from psph.kernels.sum_columns import DARCY, DVDT, NSUMS
 from psph.kernels.update import (
     SCHEME_PROJECTION,
     SCHEME_TPI,
@@ -195,10 +195,10 @@ class Stages:
                                st.perm, self.drainage.planes, self.h, alpha, rl * self.body[0],
                                rl * self.body[1], self.sums)
                 if self.coupled:
-                    self.sums[:st.n_owned, 14:19] *= self.lattice_norm
+                    self.sums[:st.n_owned, DARCY] *= self.lattice_norm
                 # the stress divergence of Eq. (26) has the same lattice moment: a
                 # uniform stress under a surface load balanced m0 q, not q (README)
-                self.sums[:st.n_owned, 23:25] *= self.lattice_norm
+                self.sums[:st.n_owned, DVDT] *= self.lattice_norm
                 if self.p_weight < 1.0:
                     pore_pressure_force(st.n_owned, self.sums, st.rho,
                                         self.scene.pressure.momentum == "gradient",

@@ -46,9 +46,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from psph.kernels.interactions import NSUMS, pair_sums
+from psph.kernels.interactions import pair_sums
 from psph.kernels.neighbours import cell_lists
 from psph.kernels.plasticity import dp_return
+from psph.kernels.sum_columns import MOMENT, NSUMS
 from psph.kernels.update import SCHEME_EXPLICIT, advance
 from psph.physics.material import ElasticSoil, material_row
 
@@ -313,7 +314,7 @@ class _SphBlock:
         """Moment matrix M of Eq. (22) at the centre at the current positions: the plain
         kernel gradient of a linear field v = L x is L M there."""
         self.evaluate(cell_lists(self.state["x"], self.h), 0.0)  # fills self.sums
-        return self.sums[self.centre, 0:4].reshape(2, 2).copy()
+        return self.sums[self.centre, MOMENT].reshape(2, 2).copy()
 
 
 def sph_element(path: str, psi_deg: float, drained: bool, correct_strain: bool = False,
