@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 
+from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
 from psph.kernels.interactions import pair_sums
 from psph.kernels.neighbours import cell_lists  # noqa: F401  (tests import it from here)
 from psph.kernels.sum_columns import MOMENT, NSUMS
@@ -35,11 +36,12 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
     cell_start, order, ncell = cell_lists(x, h)
     sums = z((n, NSUMS))
     record = pairs if pairs is not None else (np.zeros((0, 2), np.int64), z((0, 2)))
-    n_pairs = pair_sums(
-        n, n if n_owned is None else n_owned, n if n_real is None else n_real, x, v, v_slip,
-        stress, p, p_prev, poro, vol, rho, perm,
-        z((n, 2)), cell_start, order, ncell, h, alpha, 0.0, 0.0, 1.0, 0.0, 0.0, coupled,
-        False, sums, z((n, 3)), 0.0, 1.0, p_weight, pairs is not None, *record)
+    fields = PairFields(x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, z((n, 2)),
+                        z((n, 3)))
+    par = PairParams(h, tpi_alpha=alpha, coupled=coupled, p_weight=p_weight,
+                     record=pairs is not None).typed()
+    n_pairs = pair_sums(n, n if n_owned is None else n_owned, n if n_real is None else n_real,
+                        fields, Cells(cell_start, order, ncell), par, sums, PairRecord(*record))
     return sums if pairs is None else (sums, n_pairs)
 
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from psph.kernels.bundles import StepParams, SurfaceLoads, UpdateFields
 from psph.kernels.sum_columns import GV, M_XX, M_YY, NSUMS
 from psph.kernels.update import SCHEME_NONE, advance
 from psph.physics.material import material_row
@@ -33,12 +34,12 @@ def _drive(grad: np.ndarray, steps: int, dt: float, dp: np.ndarray | None) -> di
     mat = material_row(LAM, SHEAR, 2650.0, dp=dp)
     path = [stress[0].copy()]
     for k in range(steps):
-        bad = advance(1, sums, x, u, v, stress, z(1), z(1), 0.4 * one, 0.4 * one, one, one,
-                      2000.0 * one, z(1), acc, np.full(1, np.inf), k * dt,
-                      np.full(1, -1.0), z((1, 2)), z(1), dt, mat, z(1), 2e9, 9810.0,
-                      1000.0, 0.0, 0.0, 0.0, SCHEME_NONE, 0.0, False, True,
-                      np.array([-1e3, -1e3, 1e3, 1e3]), dp is not None, eps_p, eps_p, 0,
-                      True, work)
+        fields = UpdateFields(x, u, v, stress, z(1), z(1), 0.4 * one, 0.4 * one, one, one,
+                              2000.0 * one, z(1), acc, np.full(1, np.inf), z(1), eps_p, work)
+        par = StepParams(dt, k * dt, 2e9, 9810.0, 1000.0, 0.0, 0.0, 0.0, SCHEME_NONE, 0.0,
+                         False, True, dp is not None, 0, True).typed()
+        bad = advance(1, sums, fields, SurfaceLoads(np.full(1, -1.0), z((1, 2)), z(1)), mat,
+                      eps_p, np.array([-1e3, -1e3, 1e3, 1e3]), par)
         assert bad < 0
         path.append(stress[0].copy())
     return {"stress": np.array(path), "eps_p": eps_p[0], "work": work[0]}

@@ -53,6 +53,7 @@ def test_velocity_sweep_over_recorded_pairs_equals_pair_sums(n_ghost):
 
 
 def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():
+    from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
     from psph.kernels.interactions import pair_sums
     from psph.kernels.sum_columns import NSUMS
     from tests.helpers import cell_lists
@@ -64,10 +65,11 @@ def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():
     out = []
     for cap in (3, 10 * n * 40):
         sums = z((n, NSUMS))
-        got = pair_sums(n, n, n, x, z((n, 2)), z((n, 2)), z((n, 4)), z(n), z(n), np.full(n, 0.4),
-                        np.full(n, dx * dx), np.ones(n), np.ones(n), z((n, 2)), cell_start,
-                        order, ncell, h, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, True, False, sums,
-                        z((n, 3)), 0.0, 1.0, 1.0, True, z((cap, 2), np.int64), z((cap, 2)))
+        fields = PairFields(x, z((n, 2)), z((n, 2)), z((n, 4)), z(n), z(n), np.full(n, 0.4),
+                            np.full(n, dx * dx), np.ones(n), np.ones(n), z((n, 2)), z((n, 3)))
+        got = pair_sums(n, n, n, fields, Cells(cell_start, order, ncell),
+                        PairParams(h, record=True).typed(), sums,
+                        PairRecord(z((cap, 2), np.int64), z((cap, 2))))
         out.append((got, sums))
     assert out[0][0] == -1 and out[1][0] > 3
     assert np.array_equal(out[0][1], out[1][1])

@@ -70,24 +70,30 @@ from psph.kernels.sum_columns import (
 
 
 @nb.njit(cache=True, error_model="numpy")
-def pair_sums(n_total, n_owned, n_real, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc,
-              cell_start, order, ncell, h, tpi_alpha, av_alpha, av_beta, c_sound,
-              rho_l_b0, rho_l_b1, coupled, acc_term, sums, astress, as_n, w_dx,
-              p_weight, record, pairs, pair_g):
-    """Accumulate the sums listed in the module docstring for particles 0..n_owned-1.
+def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
+    """Accumulate the sums of `sum_columns.py` for particles 0..n_owned-1.
 
-    n_real: rows n_real..n_total-1 are wall ghosts, whose `v_slip` (free-slip mirror)
-    enters Gn and Gs (see the module docstring).
-    coupled: pressure-related sums (Gp, Gn, Q, sA, sAp, sApsi) are computed;
-    acc_term: the div(k dv/dt) sums (Ga) are computed. rho_l_b = rho_l * body force (N/m^3).
-    astress: (cap, 3) artificial stress R (xx, yy, xy) of every row, added to the pair
-    stress with weight (W(r) / w_dx)^as_n (C_ij of Eq. 26); as_n = 0 switches it off.
-    p_weight: 1 puts the pore pressure in the pair's total stress (Eq. 26 as written); 0
-    leaves it out, for `update.pore_pressure_force` to add it as a corrected gradient.
-    record: the visited pairs (a, b) and grad_a W_ab are written to pairs / pair_g in
-    visiting order, for `velocity_gradient_sums`. Returns the number of pairs recorded,
-    or -1 if `pairs` is too short (the sums are complete either way).
+    f: `bundles.PairFields` of rows 0..n_total-1; rows n_real.. are wall ghosts, whose
+    `v_slip` (free-slip mirror) enters GN and GS (see the module docstring).
+    cells: `bundles.Cells`. par: `bundles.PairParams`: coupled computes the
+    pressure-related sums (GP, GN, Q, SUM_A, SUM_AP, SUM_APSI); acc_term the div(k dv/dt)
+    sums GA; rho_l_b = rho_l * body force (N/m^3); the artificial stress f.astress (xx,
+    yy, xy) enters the pair stress with weight (W(r) / w_dx)^as_n (C_ij of Eq. 26), off
+    at as_n = 0; p_weight = 1 puts the pore pressure in the pair's total stress (Eq. 26
+    as written), 0 leaves it out for `update.pore_pressure_force` to add it as a
+    corrected gradient; record writes the visited pairs (a, b) and grad_a W_ab to
+    rec (`bundles.PairRecord`) in visiting order, for `velocity_gradient_sums`.
+    Returns the number of pairs recorded, or -1 if rec.pairs is too short (the sums are
+    complete either way).
     """
+    x, v, v_slip, stress, p, p_prev = f.x, f.v, f.v_slip, f.stress, f.p, f.p_prev
+    poro, vol, rho, perm, acc, astress = f.poro, f.vol, f.rho, f.perm, f.acc, f.astress
+    cell_start, order, ncell = cells.cell_start, cells.order, cells.ncell
+    h, tpi_alpha, av_alpha, av_beta = par.h, par.tpi_alpha, par.av_alpha, par.av_beta
+    c_sound, rho_l_b0, rho_l_b1 = par.c_sound, par.rho_l_b0, par.rho_l_b1
+    coupled, acc_term, as_n, w_dx = par.coupled, par.acc_term, par.as_n, par.w_dx
+    p_weight, record = par.p_weight, par.record
+    pairs, pair_g = rec.pairs, rec.pair_g
     n_pairs = 0
     cap_pairs = pairs.shape[0]
     for i in range(n_owned):

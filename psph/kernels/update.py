@@ -218,13 +218,12 @@ def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, 
 
 
 @nb.njit(cache=True, error_model="numpy")
-def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, rho, perm,
-            acc, drained_from, t, load_index, traction, load_value, dt, mat, material,
-            bulk_water, gamma_l, rho_l, b0, b1, damping, scheme, beta,
-            acc_term, correct_strain, box, plastic, eps_p, eps_soft, ponding, kicked,
-            plastic_work):
+def advance(n_owned, sums, f, loads, mat, eps_soft, box, par):
     """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
     with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
+
+    f: `bundles.UpdateFields` (owned rows); loads: `bundles.SurfaceLoads`; par:
+    `bundles.StepParams`, whose members are named below.
 
     mat: the material table (n_materials, MAT_COLUMNS), row int(material[i]) for particle
     i: Lame constants lambda, mu (Pa), rho_s, k_sat and c_k of Eq. (4), the porosity floor
@@ -249,6 +248,15 @@ def advance(n_owned, sums, x, u, v, stress, p, p_prev, poro, poro0, vol, vol0, r
     kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
     gradient of the new v; only the position moves with it here.
     """
+    x, u, v, stress, p, p_prev = f.x, f.u, f.v, f.stress, f.p, f.p_prev
+    poro, poro0, vol, vol0, rho, perm = f.poro, f.poro0, f.vol, f.vol0, f.rho, f.perm
+    acc, drained_from, material = f.acc, f.drained_from, f.material
+    eps_p, plastic_work = f.eps_p, f.plastic_work
+    load_index, traction, load_value = loads.load_index, loads.traction, loads.load_value
+    dt, t, bulk_water, gamma_l, rho_l = par.dt, par.t, par.bulk_water, par.gamma_l, par.rho_l
+    b0, b1, damping, scheme, beta = par.b0, par.b1, par.damping, par.scheme, par.beta
+    acc_term, correct_strain, plastic = par.acc_term, par.correct_strain, par.plastic
+    ponding, kicked = par.ponding, par.kicked
     bad = -1
     inv_g = rho_l / gamma_l
     for i in range(n_owned):

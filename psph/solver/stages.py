@@ -8,6 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from psph.kernels.artificial_stress import artificial_stress
+from psph.kernels.bundles import (
+    Cells,
+    PairFields,
+    PairParams,
+    PairRecord,
+    StepParams,
+    SurfaceLoads,
+    UpdateFields,
+    fields_of,
+)
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.images import image_sums
 from psph.kernels.interactions import (
@@ -179,15 +189,14 @@ class Stages:
                 self.astress = np.zeros((st.cap, 3))
             artificial_stress(st.n_total, st.stress, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
+        fields = fields_of(PairFields, st.arrays, v_slip=self.v_slip, astress=self.astress)
+        cells = Cells(self.cell_start, self.order, self.ncell)
+        par = PairParams(self.h, alpha, sb.av_alpha, sb.av_beta, self.av_sound_speed,
+                         rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
+                         as_n, self.w_dx, self.p_weight, self.record_pairs).typed()
         while True:
-            n = pair_sums(st.n_total, st.n_owned, st.n_real, st.x, st.v, self.v_slip,
-                          st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
-                          st.acc, self.cell_start, self.order, self.ncell, self.h, alpha,
-                          sb.av_alpha, sb.av_beta,
-                          self.av_sound_speed, rl * self.body[0], rl * self.body[1],
-                          self.coupled, self.acc_term, self.sums, self.astress, as_n,
-                          self.w_dx, self.p_weight, self.record_pairs, self.pairs,
-                          self.pair_g)
+            n = pair_sums(st.n_total, st.n_owned, st.n_real, fields, cells, par, self.sums,
+                          PairRecord(self.pairs, self.pair_g))
             if n >= 0:
                 self.n_pairs = n
                 if self.coupled and self.drainage.has_planes:
@@ -224,16 +233,14 @@ class Stages:
         st = self.store
         s = self.soil
         load_values(self.scene.loads, self.t, self.load_value)
-        bad = advance(st.n_owned, self.sums, st.x, st.u, st.v, st.stress, st.p, st.p_prev,
-                      st.poro, st.poro0, st.vol, st.vol0, st.rho, st.perm, st.acc,
-                      st.drained_from, self.drainage.layer_clock(self.t), st.load_index,
-                      st.traction, self.load_value, self.dt,
-                      self.mat, st.material, s.K_l, s.gamma_l, s.rho_l, self.body[0],
-                      self.body[1], self.damping, self.scheme, self.scene.pressure.beta,
-                      self.acc_term,
-                      self.scene.stabilisation.corrected_strain_rate, self.box, self.plastic,
-                      st.eps_p, self.softening.eps_hat if self.softening else st.eps_p,
-                      self.ponding, self.symplectic, st.plastic_work)
+        par = StepParams(self.dt, self.drainage.layer_clock(self.t), s.K_l, s.gamma_l, s.rho_l,
+                         self.body[0], self.body[1], self.damping, self.scheme,
+                         self.scene.pressure.beta, self.acc_term,
+                         self.scene.stabilisation.corrected_strain_rate, self.plastic,
+                         self.ponding, self.symplectic).typed()
+        bad = advance(st.n_owned, self.sums, fields_of(UpdateFields, st.arrays),
+                      SurfaceLoads(st.load_index, st.traction, self.load_value), self.mat,
+                      self.softening.eps_hat if self.softening else st.eps_p, self.box, par)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
             what = _bad_field(st, bad)
             self.failure = (self.step, self.t, int(st.key[bad]), self.slabs.rank, what)

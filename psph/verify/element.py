@@ -46,6 +46,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from psph.kernels.bundles import (
+    Cells,
+    PairFields,
+    PairParams,
+    PairRecord,
+    StepParams,
+    SurfaceLoads,
+    UpdateFields,
+    fields_of,
+)
 from psph.kernels.interactions import pair_sums
 from psph.kernels.neighbours import cell_lists
 from psph.kernels.plasticity import dp_return
@@ -294,17 +304,18 @@ class _SphBlock:
         xc = st["x"][self.centre]
         v = (st["x"] - xc) @ grad.T
         z = np.zeros
-        pair_sums(self.n, self.n, self.n, st["x"], v, v, st["stress"], st["p"], st["p_prev"],
-                  st["poro"], st["vol"], st["rho"], st["perm"], st["acc"], *cells, self.h,
-                  0.0, 0.0, 0.0, 1.0, 0.0, 0.0, True, False, self.sums, z((self.n, 3)),
-                  0.0, 1.0, 1.0, False, z((0, 2), np.int64), z((0, 2)))
-        bad = advance(self.n, self.sums, st["x"], st["u"], v, st["stress"], st["p"],
-                      st["p_prev"], st["poro"], self.poro0, st["vol"], self.vol0, st["rho"],
-                      st["perm"], st["acc"], self.drained_from, self.t, self.load_index,
-                      self.traction, self.load_value, par.dt, self.mat, self.material, par.K_l,
-                      par.rho_l * par.g, par.rho_l, 0.0, 0.0, 0.0, SCHEME_EXPLICIT,
-                      0.0, False, self.correct_strain, self.box, True,
-                      st["eps_p"], st["eps_p"], 0, True, st["plastic_work"])
+        pair_sums(self.n, self.n, self.n,
+                  fields_of(PairFields, st, v=v, v_slip=v, astress=z((self.n, 3))),
+                  Cells(*cells), PairParams(self.h).typed(), self.sums,
+                  PairRecord(z((0, 2), np.int64), z((0, 2))))
+        fields = fields_of(UpdateFields, st, v=v, poro0=self.poro0, vol0=self.vol0,
+                           drained_from=self.drained_from, material=self.material)
+        par_step = StepParams(par.dt, self.t, par.K_l, par.rho_l * par.g, par.rho_l, 0.0, 0.0,
+                              0.0, SCHEME_EXPLICIT, 0.0, False, self.correct_strain, True, 0,
+                              True).typed()
+        bad = advance(self.n, self.sums, fields,
+                      SurfaceLoads(self.load_index, self.traction, self.load_value), self.mat,
+                      st["eps_p"], self.box, par_step)
         if bad >= 0:
             raise FloatingPointError(f"advance flagged particle {bad} at t = {self.t:g} s")
         c = self.centre
