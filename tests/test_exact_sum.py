@@ -77,3 +77,21 @@ def test_exact_sum_over_ranks_equals_the_serial_sum():
     buf = np.zeros(EXPANSION_CAP)
     m = dot_expansion(a[lo:hi], b[lo:hi], hi - lo, buf)
     assert slabs.exact_sum(local_parts(buf, m)) == math.fsum((a * b).tolist())
+
+
+def test_subnormal_huge_and_zero_terms_are_summed_exactly():
+    """Every branch of the chunk accumulators: subnormal terms, terms above 2^960 (taken
+    by the expansion directly), signed zeros, and blocks of more than 256 terms."""
+    rng = np.random.default_rng(3)
+    tiny = rng.normal(size=300) * 5e-324 * rng.integers(1, 2**20, 300)  # subnormal
+    huge = rng.normal(size=20) * 2.0 ** 1000
+    mid = rng.normal(size=700) * 10.0 ** rng.integers(-30, 30, 700)
+    a = np.concatenate([tiny, huge, mid, -huge, [0.0, -0.0]])
+    rng.shuffle(a)
+    buf = np.zeros(EXPANSION_CAP)
+    assert exact_total([local_parts(buf, sum_expansion(a, len(a), buf))]) == \
+        math.fsum(a.tolist())
+    assert _split_dot(a, np.ones(len(a)), [0, 517, len(a)]) == math.fsum(a.tolist())
+    zeros = np.array([-0.0, -0.0])
+    m = sum_expansion(zeros, 2, buf)
+    assert m == 1 and math.copysign(1.0, buf[0]) == -1.0

@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, exact_total, local_parts
-from psph.kernels.laplacian import apply_operator, fixed_rhs, operator_diagonal, pair_weights
+from psph.kernels.laplacian import (
+    apply_operator,
+    fixed_rhs,
+    operator_coefficients,
+    operator_diagonal,
+    pair_weights,
+)
 from psph.kernels.sum_columns import SUM_A, SUM_AP
 from psph.solver.pcg import PCGWork, pcg
 from tests.helpers import jittered_lattice, sums_for
@@ -153,7 +159,10 @@ def test_compiled_serial_pcg_gives_the_same_bits():
     p_nb = np.where(fixed, value, 0.0)
     wk = PCGWork()
     wk.ensure(n)
-    it, r, ok = pcg_serial(n, n, len(pairs), pairs, w, w_off, vol, s, fixed, diag, rhs, p_nb,
+    c_diag, c_off, c_storage = np.zeros(len(pairs)), np.zeros(len(pairs)), np.zeros(n)
+    operator_coefficients(n, len(pairs), pairs, w, w_off, vol, s, c_diag, c_off, c_storage)
+    it, r, ok = pcg_serial(n, n, len(pairs), pairs, c_diag, c_off, c_storage, fixed, diag, rhs,
+                           p_nb,
                            np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.z, wk.d,
                            wk.sd, np.zeros(EXPANSION_CAP))
     assert res.converged and ok and it == res.iterations and r == res.residual

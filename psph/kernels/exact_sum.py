@@ -7,7 +7,9 @@ non-overlapping expansion (Shewchuk 1997, "Adaptive precision floating-point ari
 and fast robust geometric predicates"; the algorithm of Python's `math.fsum`): a few
 doubles whose exact sum is the exact sum of the rank's terms. The ranks' expansions are
 then gathered and summed by `math.fsum`, correctly rounded (`Slabs.exact_sum`). The
-result is the correctly rounded exact sum of all terms: the same bits on any rank count.
+result is the correctly rounded exact sum of all terms: the same bits on any rank count,
+and the same bits whatever exact method built each expansion (a correctly rounded value
+is unique), so the chunk accumulators below changed no result.
 
 The terms themselves (a_k b_k rounded once) depend only on the particle, not on the
 partition, so rounding the products is harmless.
@@ -42,31 +44,117 @@ def _grow(partials: np.ndarray, m: int, x: float) -> int:
     return i + 1
 
 
+# A term's 53-bit integer mantissa M at bit position s (x = M 2^(s - 1074)) is added to
+# 32-bit chunks of int64 accumulators (Neal 2015, "Fast exact summation using small and
+# large superaccumulators", arXiv:1505.05571): a term costs three integer additions
+# instead of a pass over the expansion, and 2^31 terms cannot overflow a chunk. The
+# chunks then become a few doubles, summed by `_grow` into an expansion as before.
+_CHUNKS = 67
+_MASK = (1 << 32) - 1
+# terms at or above 2^_BIG (and non-finite ones) take the expansion directly: the chunk
+# sums of huge terms could overflow a double when the chunks are converted back
+_BIG = 960
+
+
+@nb.njit(cache=True)
+def _chunks_to_expansion(acc: np.ndarray, partials: np.ndarray, m: int) -> int:
+    """Add the exact value of the chunk accumulators to the expansion partials[:m]."""
+    for i in range(_CHUNKS - 1):  # carries up: chunks 0.._CHUNKS-2 in [-2^31, 2^31)
+        carry = (acc[i] + (np.int64(1) << 31)) >> 32  # (a negative sum stays in its
+        acc[i] -= carry << 32  # chunks instead of borrowing from every chunk above)
+        acc[i + 1] += carry
+    for i in range(_CHUNKS):
+        if acc[i] != 0:
+            m = _grow(partials, m, math.ldexp(float(acc[i]), 32 * i - 1074))
+    return m
+
+
+_BLOCK = 256  # terms are formed in blocks of this many, then read as their bits
+
+
+@nb.njit(cache=True)
+def _add_block(terms: np.ndarray, count: int, acc: np.ndarray, partials: np.ndarray,
+               m: int, zero: np.ndarray) -> int:
+    """Add terms[:count] exactly: to the chunk accumulators from their bits (sign, 11-bit
+    exponent, 52-bit fraction), to the expansion partials[:m] if |term| >= 2^_BIG. Zero
+    terms are summed in IEEE arithmetic into zero[0] (zero[1] counts them). Returns the
+    expansion's length, or -1 with partials[0] = the term if a term is not finite."""
+    bits = terms.view(np.int64)
+    for k in range(count):
+        w = bits[k]
+        ex = (w >> 52) & 0x7FF
+        frac = w & ((np.int64(1) << 52) - 1)
+        if ex == 0x7FF:
+            partials[0] = terms[k]
+            return -1
+        if ex == 0 and frac == 0:
+            zero[0] = terms[k] if zero[1] == 0.0 else zero[0] + terms[k]
+            zero[1] += 1.0
+            continue
+        if ex >= _BIG + 1023:
+            m = _grow(partials, m, terms[k])
+            continue
+        # |x| = mant 2^(s - 1074): s = ex - 1 for a normal number, 0 for a subnormal
+        mant = frac | (np.int64(1) << 52) if ex > 0 else frac
+        s = ex - 1 if ex > 0 else 0
+        ci = s >> 5
+        sh = s & 31
+        lo = (mant & ((np.int64(1) << (32 - sh)) - 1)) << sh
+        mid = (mant >> (32 - sh)) & _MASK
+        hi = (mant >> 32) >> (32 - sh)
+        if w < 0:
+            acc[ci] -= lo
+            acc[ci + 1] -= mid
+            acc[ci + 2] -= hi
+        else:
+            acc[ci] += lo
+            acc[ci + 1] += mid
+            acc[ci + 2] += hi
+    return m
+
+
+@nb.njit(cache=True)
+def _finish(acc: np.ndarray, partials: np.ndarray, m: int, zero: np.ndarray) -> int:
+    m = _chunks_to_expansion(acc, partials, m)
+    if m == 0 and zero[1] > 0.0:  # only zero terms: their IEEE sum (-0.0 if all are -0.0)
+        partials[0] = zero[0]
+        m = 1
+    return m
+
+
 @nb.njit(cache=True)
 def dot_expansion(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) -> int:
     """Expansion of sum_k a[k] b[k] over k < n into `partials` (EXPANSION_CAP,); returns
     its length, or -1 if a term is not finite (partials[0] then holds it)."""
+    acc = np.zeros(_CHUNKS, np.int64)
+    terms = np.empty(_BLOCK)
+    zero = np.zeros(2)
     m = 0
-    for k in range(n):
-        x = a[k] * b[k]
-        if not math.isfinite(x):
-            partials[0] = x
+    for start in range(0, n, _BLOCK):
+        count = min(_BLOCK, n - start)
+        for k in range(count):
+            terms[k] = a[start + k] * b[start + k]
+        m = _add_block(terms, count, acc, partials, m, zero)
+        if m < 0:
             return -1
-        m = _grow(partials, m, x)
-    return m
+    return _finish(acc, partials, m, zero)
 
 
 @nb.njit(cache=True)
 def sum_expansion(a: np.ndarray, n: int, partials: np.ndarray) -> int:
     """Expansion of sum_k a[k] over k < n; as `dot_expansion`."""
+    acc = np.zeros(_CHUNKS, np.int64)
+    terms = np.empty(_BLOCK)
+    zero = np.zeros(2)
     m = 0
-    for k in range(n):
-        x = a[k]
-        if not math.isfinite(x):
-            partials[0] = x
+    for start in range(0, n, _BLOCK):
+        count = min(_BLOCK, n - start)
+        for k in range(count):
+            terms[k] = a[start + k]
+        m = _add_block(terms, count, acc, partials, m, zero)
+        if m < 0:
             return -1
-        m = _grow(partials, m, x)
-    return m
+    return _finish(acc, partials, m, zero)
 
 
 def local_parts(partials: np.ndarray, m: int) -> np.ndarray:

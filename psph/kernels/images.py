@@ -33,14 +33,15 @@ from psph.kernels.sum_columns import (
 
 
 @nb.njit(cache=True, inline="always")
-def _add_image(s, vol_j, kbar, f2, p_image, d0, d1, rho_l_b0, rho_l_b1):
-    """One image neighbour at x_i + (d0, d1) with pressure p_image into row s."""
+def _add_image(sums, i, vol_j, kbar, f2, p_image, d0, d1, rho_l_b0, rho_l_b1):
+    """One image neighbour at x_i + (d0, d1) with pressure p_image into row i of sums
+    (indexed in place: a row view per pair costs more than the pair's arithmetic)."""
     aij = vol_j * kbar * f2
-    s[Q_X] += vol_j * d0 * f2
-    s[Q_Y] += vol_j * d1 * f2
-    s[SUM_A] += aij
-    s[SUM_AP] += aij * p_image
-    s[SUM_APSI] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
+    sums[i, Q_X] += vol_j * d0 * f2
+    sums[i, Q_Y] += vol_j * d1 * f2
+    sums[i, SUM_A] += aij
+    sums[i, SUM_AP] += aij * p_image
+    sums[i, SUM_APSI] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
 
 
 @nb.njit(cache=True, inline="always")
@@ -91,11 +92,11 @@ def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: 
             if a < n_owned:
                 pt = p[b] + tpi_alpha * (p[b] - p_prev[b])
                 d0, d1 = (d_ax, d_o) if ax == 0 else (d_o, d_ax)
-                _add_image(sums[a], vol[b], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+                _add_image(sums, a, vol[b], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
             if b < n_owned:
                 pt = p[a] + tpi_alpha * (p[a] - p_prev[a])
                 d0, d1 = (d_ax, -d_o) if ax == 0 else (-d_o, d_ax)
-                _add_image(sums[b], vol[a], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+                _add_image(sums, b, vol[a], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
         for i in range(n_owned):
             d_ax = 2.0 * (pos - x[i, ax])
             if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
@@ -104,7 +105,7 @@ def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: 
             f2 = -2.0 * dw_cubic(r, h) / r
             pt = p[i] + tpi_alpha * (p[i] - p_prev[i])
             d0, d1 = (d_ax, 0.0) if ax == 0 else (0.0, d_ax)
-            _add_image(sums[i], vol[i], perm[i], f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+            _add_image(sums, i, vol[i], perm[i], f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
 
 
 @nb.njit(cache=True)

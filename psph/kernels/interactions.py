@@ -172,82 +172,78 @@ def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
                             ptb = p[b] + tpi_alpha * (p[b] - p_prev[b])
                             dpsi = -(rho_l_b0 * dx0 + rho_l_b1 * dx1)
                         if own_a:
-                            s = sums[a]
-                            s[M_XX] += vb * dx0 * g0
-                            s[M_XY] += vb * dx0 * g1
-                            s[M_YX] += vb * dx1 * g0
-                            s[M_YY] += vb * dx1 * g1
-                            s[GV_XX] += vb * dv0 * g0
-                            s[GV_XY] += vb * dv0 * g1
-                            s[GV_YX] += vb * dv1 * g0
-                            s[GV_YY] += vb * dv1 * g1
+                            sums[a, M_XX] += vb * dx0 * g0
+                            sums[a, M_XY] += vb * dx0 * g1
+                            sums[a, M_YX] += vb * dx1 * g0
+                            sums[a, M_YY] += vb * dx1 * g1
+                            sums[a, GV_XX] += vb * dv0 * g0
+                            sums[a, GV_XY] += vb * dv0 * g1
+                            sums[a, GV_YX] += vb * dv1 * g0
+                            sums[a, GV_YY] += vb * dv1 * g1
                             if ghost_pair:
-                                s[GS_XX] += vb * (ds0 - dv0) * g0
-                                s[GS_XY] += vb * (ds0 - dv0) * g1
-                                s[GS_YX] += vb * (ds1 - dv1) * g0
-                                s[GS_YY] += vb * (ds1 - dv1) * g1
-                            s[DVDT_X] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
-                            s[DVDT_Y] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
+                                sums[a, GS_XX] += vb * (ds0 - dv0) * g0
+                                sums[a, GS_XY] += vb * (ds0 - dv0) * g1
+                                sums[a, GS_YX] += vb * (ds1 - dv1) * g0
+                                sums[a, GS_YY] += vb * (ds1 - dv1) * g1
+                            sums[a, DVDT_X] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
+                            sums[a, DVDT_Y] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
                             if coupled:
-                                s[GP_X] += vb * dp * g0
-                                s[GP_Y] += vb * dp * g1
+                                sums[a, GP_X] += vb * dp * g0
+                                sums[a, GP_Y] += vb * dp * g1
                                 wn = vb * (1.0 - poro[b])
-                                s[GN_XX] += wn * ds0 * g0
-                                s[GN_XY] += wn * ds0 * g1
-                                s[GN_YX] += wn * ds1 * g0
-                                s[GN_YY] += wn * ds1 * g1
-                                s[Q_X] += vb * dx0 * f2
-                                s[Q_Y] += vb * dx1 * f2
+                                sums[a, GN_XX] += wn * ds0 * g0
+                                sums[a, GN_XY] += wn * ds0 * g1
+                                sums[a, GN_YX] += wn * ds1 * g0
+                                sums[a, GN_YY] += wn * ds1 * g1
+                                sums[a, Q_X] += vb * dx0 * f2
+                                sums[a, Q_Y] += vb * dx1 * f2
                                 aab = vb * kbar * f2
-                                s[SUM_A] += aab
-                                s[SUM_AP] += aab * ptb
-                                s[SUM_APSI] += aab * dpsi
+                                sums[a, SUM_A] += aab
+                                sums[a, SUM_AP] += aab * ptb
+                                sums[a, SUM_APSI] += aab * dpsi
                         if own_b:
-                            s = sums[b]
-                            s[M_XX] += va * dx0 * g0
-                            s[M_XY] += va * dx0 * g1
-                            s[M_YX] += va * dx1 * g0
-                            s[M_YY] += va * dx1 * g1
-                            s[GV_XX] += va * dv0 * g0
-                            s[GV_XY] += va * dv0 * g1
-                            s[GV_YX] += va * dv1 * g0
-                            s[GV_YY] += va * dv1 * g1
+                            sums[b, M_XX] += va * dx0 * g0
+                            sums[b, M_XY] += va * dx0 * g1
+                            sums[b, M_YX] += va * dx1 * g0
+                            sums[b, M_YY] += va * dx1 * g1
+                            sums[b, GV_XX] += va * dv0 * g0
+                            sums[b, GV_XY] += va * dv0 * g1
+                            sums[b, GV_YX] += va * dv1 * g0
+                            sums[b, GV_YY] += va * dv1 * g1
                             if ghost_pair:
-                                s[GS_XX] += va * (ds0 - dv0) * g0
-                                s[GS_XY] += va * (ds0 - dv0) * g1
-                                s[GS_YX] += va * (ds1 - dv1) * g0
-                                s[GS_YY] += va * (ds1 - dv1) * g1
-                            s[DVDT_X] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
-                            s[DVDT_Y] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
+                                sums[b, GS_XX] += va * (ds0 - dv0) * g0
+                                sums[b, GS_XY] += va * (ds0 - dv0) * g1
+                                sums[b, GS_YX] += va * (ds1 - dv1) * g0
+                                sums[b, GS_YY] += va * (ds1 - dv1) * g1
+                            sums[b, DVDT_X] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
+                            sums[b, DVDT_Y] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
                             if coupled:
-                                s[GP_X] += va * dp * g0
-                                s[GP_Y] += va * dp * g1
+                                sums[b, GP_X] += va * dp * g0
+                                sums[b, GP_Y] += va * dp * g1
                                 wn = va * (1.0 - poro[a])
-                                s[GN_XX] += wn * ds0 * g0
-                                s[GN_XY] += wn * ds0 * g1
-                                s[GN_YX] += wn * ds1 * g0
-                                s[GN_YY] += wn * ds1 * g1
-                                s[Q_X] -= va * dx0 * f2
-                                s[Q_Y] -= va * dx1 * f2
+                                sums[b, GN_XX] += wn * ds0 * g0
+                                sums[b, GN_XY] += wn * ds0 * g1
+                                sums[b, GN_YX] += wn * ds1 * g0
+                                sums[b, GN_YY] += wn * ds1 * g1
+                                sums[b, Q_X] -= va * dx0 * f2
+                                sums[b, Q_Y] -= va * dx1 * f2
                                 aba = va * kbar * f2
-                                s[SUM_A] += aba
-                                s[SUM_AP] += aba * pta
-                                s[SUM_APSI] -= aba * dpsi
+                                sums[b, SUM_A] += aba
+                                sums[b, SUM_AP] += aba * pta
+                                sums[b, SUM_APSI] -= aba * dpsi
                         if acc_term and coupled:
                             ka0 = perm[b] * acc[b, 0] - perm[a] * acc[a, 0]
                             ka1 = perm[b] * acc[b, 1] - perm[a] * acc[a, 1]
                             if own_a:
-                                s = sums[a]
-                                s[GA_XX] += vb * ka0 * g0
-                                s[GA_XY] += vb * ka0 * g1
-                                s[GA_YX] += vb * ka1 * g0
-                                s[GA_YY] += vb * ka1 * g1
+                                sums[a, GA_XX] += vb * ka0 * g0
+                                sums[a, GA_XY] += vb * ka0 * g1
+                                sums[a, GA_YX] += vb * ka1 * g0
+                                sums[a, GA_YY] += vb * ka1 * g1
                             if own_b:
-                                s = sums[b]
-                                s[GA_XX] += va * ka0 * g0
-                                s[GA_XY] += va * ka0 * g1
-                                s[GA_YX] += va * ka1 * g0
-                                s[GA_YY] += va * ka1 * g1
+                                sums[b, GA_XX] += va * ka0 * g0
+                                sums[b, GA_XY] += va * ka0 * g1
+                                sums[b, GA_YX] += va * ka1 * g0
+                                sums[b, GA_YY] += va * ka1 * g1
     return n_pairs if n_pairs <= cap_pairs else -1
 
 
@@ -286,41 +282,39 @@ def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, p
             ds0 = v_slip[b, 0] - v_slip[a, 0]
             ds1 = v_slip[b, 1] - v_slip[a, 1]
         if a < n_owned:
-            s = sums[a]
             vb = vol[b]
-            s[GV_XX] += vb * dv0 * g0
-            s[GV_XY] += vb * dv0 * g1
-            s[GV_YX] += vb * dv1 * g0
-            s[GV_YY] += vb * dv1 * g1
+            sums[a, GV_XX] += vb * dv0 * g0
+            sums[a, GV_XY] += vb * dv0 * g1
+            sums[a, GV_YX] += vb * dv1 * g0
+            sums[a, GV_YY] += vb * dv1 * g1
             if ghost_pair:
-                s[GS_XX] += vb * (ds0 - dv0) * g0
-                s[GS_XY] += vb * (ds0 - dv0) * g1
-                s[GS_YX] += vb * (ds1 - dv1) * g0
-                s[GS_YY] += vb * (ds1 - dv1) * g1
+                sums[a, GS_XX] += vb * (ds0 - dv0) * g0
+                sums[a, GS_XY] += vb * (ds0 - dv0) * g1
+                sums[a, GS_YX] += vb * (ds1 - dv1) * g0
+                sums[a, GS_YY] += vb * (ds1 - dv1) * g1
             if coupled:
                 wn = vb * (1.0 - poro[b])
-                s[GN_XX] += wn * ds0 * g0
-                s[GN_XY] += wn * ds0 * g1
-                s[GN_YX] += wn * ds1 * g0
-                s[GN_YY] += wn * ds1 * g1
+                sums[a, GN_XX] += wn * ds0 * g0
+                sums[a, GN_XY] += wn * ds0 * g1
+                sums[a, GN_YX] += wn * ds1 * g0
+                sums[a, GN_YY] += wn * ds1 * g1
         if b < n_owned:
-            s = sums[b]
             va = vol[a]
-            s[GV_XX] += va * dv0 * g0
-            s[GV_XY] += va * dv0 * g1
-            s[GV_YX] += va * dv1 * g0
-            s[GV_YY] += va * dv1 * g1
+            sums[b, GV_XX] += va * dv0 * g0
+            sums[b, GV_XY] += va * dv0 * g1
+            sums[b, GV_YX] += va * dv1 * g0
+            sums[b, GV_YY] += va * dv1 * g1
             if ghost_pair:
-                s[GS_XX] += va * (ds0 - dv0) * g0
-                s[GS_XY] += va * (ds0 - dv0) * g1
-                s[GS_YX] += va * (ds1 - dv1) * g0
-                s[GS_YY] += va * (ds1 - dv1) * g1
+                sums[b, GS_XX] += va * (ds0 - dv0) * g0
+                sums[b, GS_XY] += va * (ds0 - dv0) * g1
+                sums[b, GS_YX] += va * (ds1 - dv1) * g0
+                sums[b, GS_YY] += va * (ds1 - dv1) * g1
             if coupled:
                 wn = va * (1.0 - poro[a])
-                s[GN_XX] += wn * ds0 * g0
-                s[GN_XY] += wn * ds0 * g1
-                s[GN_YX] += wn * ds1 * g0
-                s[GN_YY] += wn * ds1 * g1
+                sums[b, GN_XX] += wn * ds0 * g0
+                sums[b, GN_XY] += wn * ds0 * g1
+                sums[b, GN_YX] += wn * ds1 * g0
+                sums[b, GN_YY] += wn * ds1 * g1
 
 
 @nb.njit(cache=True)

@@ -60,6 +60,44 @@ def pair_weights(n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray, x: np.ndar
 
 
 @nb.njit(cache=True)
+def operator_coefficients(n_total: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
+                          w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray,
+                          c_diag: np.ndarray, c_off: np.ndarray, c_storage: np.ndarray) -> None:
+    """The products of `apply_operator` that do not change during a solve: c_diag[k] =
+    V_a V_b w_diag[k], c_off[k] = V_a V_b w_off[k] and c_storage[i] = V_i s_i, computed once
+    per solve for `apply_scaled` (the same roundings, so the same bits)."""
+    for i in range(n_total):
+        c_storage[i] = vol[i] * storage[i]
+    for k in range(n_pairs):
+        vv = vol[pairs[k, 0]] * vol[pairs[k, 1]]
+        c_diag[k] = vv * w_diag[k]
+        c_off[k] = vv * w_off[k]
+
+
+@nb.njit(cache=True)
+def apply_scaled(n_owned: int, n_pairs: int, pairs: np.ndarray, c_diag: np.ndarray,
+                 c_off: np.ndarray, c_storage: np.ndarray, fixed: np.ndarray, q: np.ndarray,
+                 out: np.ndarray) -> None:
+    """out[:n_owned] = S q from the coefficients of `operator_coefficients` (the operator
+    of `apply_operator`; the solve applies it every iteration)."""
+    for i in range(n_owned):
+        out[i] = c_storage[i] * q[i]
+    for k in range(n_pairs):
+        a = pairs[k, 0]
+        b = pairs[k, 1]
+        wd = c_diag[k]
+        wo = c_off[k]
+        fa = fixed[a]
+        fb = fixed[b]
+        qa = 0.0 if fa else q[a]
+        qb = 0.0 if fb else q[b]
+        if a < n_owned:
+            out[a] += wd * q[a] if fa else wd * qa - wo * qb
+        if b < n_owned:
+            out[b] += wd * q[b] if fb else wd * qb - wo * qa
+
+
+@nb.njit(cache=True)
 def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
                    w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray,
                    q: np.ndarray, out: np.ndarray) -> None:
@@ -69,20 +107,12 @@ def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.nda
     that one residual norm serves both); a free row keeps the diagonal part of a fixed
     neighbour j, and its coupling to q_j is moved to the right-hand side (`fixed_rhs`), so
     S stays symmetric."""
-    for i in range(n_owned):
-        out[i] = vol[i] * storage[i] * q[i]
-    for k in range(n_pairs):
-        a = pairs[k, 0]
-        b = pairs[k, 1]
-        vv = vol[a] * vol[b]
-        wd = vv * w_diag[k]
-        wo = vv * w_off[k]
-        qa = 0.0 if fixed[a] else q[a]
-        qb = 0.0 if fixed[b] else q[b]
-        if a < n_owned:
-            out[a] += wd * q[a] if fixed[a] else wd * qa - wo * qb
-        if b < n_owned:
-            out[b] += wd * q[b] if fixed[b] else wd * qb - wo * qa
+    c_diag = np.empty(n_pairs)
+    c_off = np.empty(n_pairs)
+    c_storage = np.empty(n_owned)
+    operator_coefficients(n_owned, n_pairs, pairs, w_diag, w_off, vol, storage, c_diag,
+                          c_off, c_storage)
+    apply_scaled(n_owned, n_pairs, pairs, c_diag, c_off, c_storage, fixed, q, out)
 
 
 @nb.njit(cache=True)

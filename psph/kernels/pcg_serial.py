@@ -1,6 +1,6 @@
 """`psph.solver.pcg.pcg` in one compiled function, for a run on one rank (no halo to refresh).
 
-The same operations in the same order: the operator of `laplacian.apply_operator`, the
+The same operations in the same order: the operator of `laplacian.apply_scaled`, the
 wall-ghost refresh of the search direction (sign times its source row), the Jacobi
 preconditioner, and inner products that are correctly rounded exact sums (`exact_dot`,
 the bits `Slabs.exact_sum` gives on any rank count). So one rank here and two ranks
@@ -15,7 +15,7 @@ import numba as nb
 import numpy as np
 
 from psph.kernels.exact_sum import exact_dot
-from psph.kernels.laplacian import apply_operator, cg_step
+from psph.kernels.laplacian import apply_scaled, cg_step
 
 
 @nb.njit(cache=True)
@@ -26,14 +26,16 @@ def _refresh_ghosts(n_real: int, n_total: int, src: np.ndarray, sign: np.ndarray
 
 
 @nb.njit(cache=True, error_model="numpy")  # x / 0 -> inf as numpy, not an exception
-def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
-               w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray,
+def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, c_diag: np.ndarray,
+               c_off: np.ndarray, c_storage: np.ndarray, fixed: np.ndarray,
                diag: np.ndarray, rhs: np.ndarray, x: np.ndarray, src: np.ndarray,
                sign: np.ndarray, tol: float, maxiter: int, r: np.ndarray, z: np.ndarray,
                d: np.ndarray, sd: np.ndarray, partials: np.ndarray) -> tuple:
     """Solve S x = rhs on rows 0..n-1 (rows n..n_total-1: wall ghosts, x's current on
-    entry). Returns (iterations, residual, converged) as `psph.solver.pcg.pcg`."""
-    apply_operator(n, n_pairs, pairs, w_diag, w_off, vol, storage, fixed, x, sd)
+    entry). c_diag, c_off, c_storage: the operator's coefficients
+    (`laplacian.operator_coefficients`). Returns (iterations, residual, converged) as
+    `psph.solver.pcg.pcg`."""
+    apply_scaled(n, n_pairs, pairs, c_diag, c_off, c_storage, fixed, x, sd)
     for i in range(n):
         r[i] = rhs[i] - sd[i]
     b_norm = math.sqrt(exact_dot(rhs, rhs, n, partials))
@@ -48,7 +50,7 @@ def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, w_diag: np
     rz = exact_dot(r, z, n, partials)
     for it in range(1, maxiter + 1):
         _refresh_ghosts(n, n_total, src, sign, d)
-        apply_operator(n, n_pairs, pairs, w_diag, w_off, vol, storage, fixed, d, sd)
+        apply_scaled(n, n_pairs, pairs, c_diag, c_off, c_storage, fixed, d, sd)
         dsd = exact_dot(d, sd, n, partials)
         if not (dsd > 0.0 and math.isfinite(dsd)):
             return it, (math.nan if not math.isfinite(dsd) else res), False

@@ -10,7 +10,13 @@ import numpy as np
 
 from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, local_parts
 from psph.kernels.images import image_weights
-from psph.kernels.laplacian import apply_operator, fixed_rhs, operator_diagonal, pair_weights
+from psph.kernels.laplacian import (
+    apply_scaled,
+    fixed_rhs,
+    operator_coefficients,
+    operator_diagonal,
+    pair_weights,
+)
 from psph.kernels.pcg_serial import pcg_serial
 from psph.kernels.projection import (
     imposed_increments,
@@ -39,10 +45,11 @@ class PressureSolve:
             a.update(cap=cap, storage=np.zeros(cap), rhs=np.zeros(cap), diag=np.zeros(cap),
                      dp=np.zeros((cap, 1)), imposed=np.zeros((cap, 2)),
                      fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)),
-                     acc=np.zeros((cap, 2)))
+                     acc=np.zeros((cap, 2)), c_storage=np.zeros(cap))
         if "w" not in a or a["w"].shape[0] < n_pairs:
             m = max(n_pairs, self.sim.pairs.shape[0])
-            a.update(w=np.zeros(m), w_diag=np.zeros(m), w_off=np.zeros(m))
+            a.update(w=np.zeros(m), w_diag=np.zeros(m), w_off=np.zeros(m), c_diag=np.zeros(m),
+                     c_off=np.zeros(m))
         return a
 
     def _weights(self, a: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -85,6 +92,8 @@ class PressureSolve:
         np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
         value = imposed[:, 1]
         fixed_rhs(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, value, a["rhs"])
+        operator_coefficients(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], a["c_diag"],
+                              a["c_off"], a["c_storage"])
         return a, wd, wo, fixed, value
 
     def residual(self) -> float:
@@ -103,7 +112,7 @@ class PressureSolve:
         np.subtract(st.p[:n], st.p_prev[:n], out=d[:n])
         self.refresh_rows(dp, signed=True)
         res = a["diag"]  # scratch: S dp, then the residual
-        apply_operator(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, d, res)
+        apply_scaled(n, npairs, sim.pairs, a["c_diag"], a["c_off"], a["c_storage"], fixed, d, res)
         np.subtract(a["rhs"][:n], res[:n], out=res[:n])
         norm_b = self._dot(a["rhs"], a["rhs"])
         return math.sqrt(self._dot(res, res) / norm_b) if norm_b > 0.0 else 0.0
@@ -153,7 +162,8 @@ class PressureSolve:
         self.refresh_rows(dp, signed=True)
 
         def apply(q, out):
-            apply_operator(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, q, out)
+            apply_scaled(n, npairs, sim.pairs, a["c_diag"], a["c_off"], a["c_storage"], fixed, q,
+                         out)
 
         def refresh(q):
             self.refresh_rows(q.reshape(-1, 1), signed=True)
@@ -162,8 +172,8 @@ class PressureSolve:
         if sim.slabs.size == 1:  # the same bits, compiled (kernels/pcg_serial.py)
             wk = self._work
             wk.ensure(st.cap)
-            res = PCGResult(*pcg_serial(n, nt, npairs, sim.pairs, wd, wo, st.vol,
-                                        a["storage"], fixed, a["diag"], a["rhs"], d,
+            res = PCGResult(*pcg_serial(n, nt, npairs, sim.pairs, a["c_diag"], a["c_off"],
+                                        a["c_storage"], fixed, a["diag"], a["rhs"], d,
                                         sim.ghost_src, sim.ghost_sign, pc.tolerance,
                                         pc.max_iterations, wk.r, wk.z, wk.d, wk.sd,
                                         self._buf))
