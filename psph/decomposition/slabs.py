@@ -17,6 +17,10 @@ from psph.kernels.exact_sum import exact_total
 from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
 from psph.state.particles import ParticleStore
 
+# parts of an expansion that `exact_sum` gathers in one fixed-size row (the chunk
+# accumulators of `psph.kernels.exact_sum` give at most 67; most sums need a handful)
+_SUM_SLOTS = 72
+
 
 def slab_cuts(coords: np.ndarray, nranks: int, min_width: float = 0.0) -> np.ndarray:
     """Cut positions (nranks + 1,) giving each rank about the same number of particles,
@@ -383,6 +387,20 @@ class Slabs:
         (`psph.kernels.exact_sum`): the same bits on any rank count. Collective."""
         if self.size == 1:
             return exact_total([parts])
+        # one buffer collective (a CG solve makes three of these an iteration): each rank's
+        # length and parts in a fixed row; a longer expansion anywhere (rare: terms over
+        # hundreds of decades) takes the general gather, on every rank alike
+        k = len(parts)
+        slots = _SUM_SLOTS
+        send = self._send_buffer("exact_sum", 1, slots)[0]
+        send[0] = k
+        if k < slots:
+            send[1:1 + k] = parts
+        recv = self._send_buffer("exact_sum_in", self.size, slots)[:self.size]
+        self.comm.Allgather(send, recv)
+        lengths = recv[:, 0].astype(np.int64)
+        if (lengths < slots).all():
+            return exact_total([recv[r, 1:1 + lengths[r]] for r in range(self.size)])
         return exact_total(self.comm.allgather(np.ascontiguousarray(parts)))
 
     def exact_sums(self, parts: list[np.ndarray]) -> list[float]:
