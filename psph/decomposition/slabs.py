@@ -9,6 +9,8 @@ state), and receives the same. A rank also keeps copies of its own migrants as h
 that step, since its neighbour packed its halo before knowing of them.
 """
 
+import math
+
 import numpy as np
 from mpi4py import MPI
 
@@ -20,6 +22,16 @@ from psph.state.particles import ParticleStore
 # parts of an expansion that `exact_sum` gathers in one fixed-size row (the chunk
 # accumulators of `psph.kernels.exact_sum` give at most 67; most sums need a handful)
 _SUM_SLOTS = 72
+
+
+def _fsum_or_nan(parts: list[np.ndarray]) -> float:
+    """`exact_total` of a few short expansions without its array copies: math.fsum is
+    correctly rounded; a non-finite term or an overflow gives NaN, as there."""
+    try:
+        total = math.fsum([v for p in parts for v in p.tolist()])
+    except (OverflowError, ValueError):  # ValueError: inf - inf
+        return math.nan
+    return total if math.isfinite(total) else math.nan
 
 
 def slab_cuts(coords: np.ndarray, nranks: int, min_width: float = 0.0) -> np.ndarray:
@@ -385,30 +397,29 @@ class Slabs:
     def exact_sum(self, parts: np.ndarray) -> float:
         """Correctly rounded sum over ranks of each rank's exact expansion `parts`
         (`psph.kernels.exact_sum`): the same bits on any rank count. Collective."""
-        if self.size == 1:
-            return exact_total([parts])
-        # one buffer collective (a CG solve makes three of these an iteration): each rank's
-        # length and parts in a fixed row; a longer expansion anywhere (rare: terms over
-        # hundreds of decades) takes the general gather, on every rank alike
-        k = len(parts)
-        slots = _SUM_SLOTS
-        send = self._send_buffer("exact_sum", 1, slots)[0]
-        send[0] = k
-        if k < slots:
-            send[1:1 + k] = parts
-        recv = self._send_buffer("exact_sum_in", self.size, slots)[:self.size]
-        self.comm.Allgather(send, recv)
-        lengths = recv[:, 0].astype(np.int64)
-        if (lengths < slots).all():
-            return exact_total([recv[r, 1:1 + lengths[r]] for r in range(self.size)])
-        return exact_total(self.comm.allgather(np.ascontiguousarray(parts)))
+        return self.exact_sums([parts])[0]
 
     def exact_sums(self, parts: list[np.ndarray]) -> list[float]:
         """`exact_sum` of several expansions in one collective."""
         if self.size == 1:
             return [exact_total([p]) for p in parts]
+        # one buffer collective (a CG solve makes two of these an iteration): each rank's
+        # lengths and parts in fixed rows; a longer expansion anywhere (rare: terms over
+        # hundreds of decades) takes the general gather, on every rank alike
+        k, slots = len(parts), _SUM_SLOTS
+        send = self._send_buffer(f"exact_sum{k}", 1, k * slots)[0]
+        for j, p in enumerate(parts):
+            send[j * slots] = len(p)
+            if len(p) < slots:
+                send[j * slots + 1:j * slots + 1 + len(p)] = p
+        recv = self._send_buffer(f"exact_sum_in{k}", self.size, k * slots)[:self.size]
+        self.comm.Allgather(send, recv)
+        lengths = recv[:, ::slots].astype(np.int64)
+        if (lengths < slots).all():
+            return [_fsum_or_nan([recv[r, j * slots + 1:j * slots + 1 + lengths[r, j]]
+                                  for r in range(self.size)]) for j in range(k)]
         gathered = self.comm.allgather([np.ascontiguousarray(p) for p in parts])
-        return [exact_total([g[j] for g in gathered]) for j in range(len(parts))]
+        return [exact_total([g[j] for g in gathered]) for j in range(k)]
 
     def allreduce_max(self, value: float) -> float:
         return self.comm.allreduce(value, op=MPI.MAX)

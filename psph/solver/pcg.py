@@ -3,9 +3,10 @@
 
 The operator, its diagonal and the halo refresh are passed in, so this module knows no
 equation and no communicator: `apply(q, out)` writes S q on the owned rows, `refresh(q)`
-brings the halo (and wall-ghost) rows of a search direction up to date, and `dot(a, b)` is
-a collective, partition-independent inner product over the owned rows (the exact sums of
-`psph.kernels.exact_sum`). With all three reproducible, the iterates, the iteration count
+brings the halo (and wall-ghost) rows of a search direction up to date, and
+`dots((a, b), ...)` gives collective, partition-independent inner products over the owned
+rows, several in one collective (the exact sums of `psph.kernels.exact_sum`; two
+collectives an iteration). With all three reproducible, the iterates, the iteration count
 and the solution are the same bits on any rank count.
 """
 
@@ -43,40 +44,42 @@ class PCGResult:
 
 
 def pcg(apply: Callable[[np.ndarray, np.ndarray], None], diag: np.ndarray, rhs: np.ndarray,
-        x: np.ndarray, n_owned: int, dot: Callable[[np.ndarray, np.ndarray], float],
+        x: np.ndarray, n_owned: int, dots: Callable[..., list[float]],
         refresh: Callable[[np.ndarray], None], tol: float, maxiter: int,
         work: PCGWork) -> PCGResult:
     """Solve S x = rhs for the owned rows of x (its initial value is the first guess; its
     halo rows must be current). Stops when ||r|| <= tol ||rhs||. Collective: every rank
-    calls `dot` and `refresh` in the same order. On return the halo rows of x are not
+    calls `dots` and `refresh` in the same order. The same iterates as
+    `kernels/pcg_serial.py`, whose dot products are evaluated one at a time: exact sums do
+    not depend on when they are taken. On return the halo rows of x are not
     refreshed."""
     n = n_owned
     work.ensure(x.shape[0])
     r, z, d, sd = work.r, work.z, work.d, work.sd
     apply(x, sd)
     np.subtract(rhs[:n], sd[:n], out=r[:n])
-    b_norm = math.sqrt(dot(rhs, rhs))
+    np.divide(r[:n], diag[:n], out=z[:n])
+    bb, rr, rz = dots((rhs, rhs), (r, r), (r, z))
+    b_norm = math.sqrt(bb)
     if b_norm == 0.0:
         b_norm = 1.0
-    res = math.sqrt(dot(r, r)) / b_norm
+    res = math.sqrt(rr) / b_norm
     if res <= tol:
         return PCGResult(0, res, True)
-    np.divide(r[:n], diag[:n], out=z[:n])
     d[:n] = z[:n]
-    rz = dot(r, z)
     for it in range(1, maxiter + 1):
         refresh(d)
         apply(d, sd)
-        dsd = dot(d, sd)
+        (dsd,) = dots((d, sd))
         if not (dsd > 0.0 and math.isfinite(dsd)):
             return PCGResult(it, math.nan if not math.isfinite(dsd) else res, False)
         alpha = rz / dsd
         cg_step(n, alpha, d, sd, x, r)
-        res = math.sqrt(dot(r, r)) / b_norm
+        np.divide(r[:n], diag[:n], out=z[:n])
+        rr, rz_new = dots((r, r), (r, z))
+        res = math.sqrt(rr) / b_norm
         if res <= tol:
             return PCGResult(it, res, True)
-        np.divide(r[:n], diag[:n], out=z[:n])
-        rz_new = dot(r, z)
         if rz == 0.0:  # breakdown (a non-positive preconditioner): not converged
             return PCGResult(it, res, False)
         beta = rz_new / rz

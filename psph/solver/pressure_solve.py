@@ -37,6 +37,7 @@ class PressureSolve:
         self._a = {}
         self._work = PCGWork()
         self._buf = np.zeros(EXPANSION_CAP)
+        self._bufs: list[np.ndarray] = []
         self._ones = np.zeros(0)
 
     def _arrays(self, cap: int, n_pairs: int) -> dict:
@@ -131,8 +132,16 @@ class PressureSolve:
 
     def _dot(self, a: np.ndarray, b: np.ndarray) -> float:
         """Inner product over the owned rows, the same bits on any rank count."""
-        m = dot_expansion(a, b, self.sim.store.n_owned, self._buf)
-        return self.sim.slabs.exact_sum(local_parts(self._buf, m))
+        return self._dots((a, b))[0]
+
+    def _dots(self, *pairs: tuple[np.ndarray, np.ndarray]) -> list[float]:
+        """Inner products over the owned rows, in one collective."""
+        n = self.sim.store.n_owned
+        if len(self._bufs) < len(pairs):
+            self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
+        parts = [local_parts(buf, dot_expansion(a, b, n, buf))
+                 for (a, b), buf in zip(pairs, self._bufs, strict=False)]
+        return self.sim.slabs.exact_sums(parts)
 
     def project(self) -> None:
         """p^(n+1) = p^n + dp from one solve of Eq. (29) (module `psph.kernels.projection`),
@@ -178,7 +187,7 @@ class PressureSolve:
                                         pc.max_iterations, wk.r, wk.z, wk.d, wk.sd,
                                         self._buf))
         else:
-            res = pcg(apply, a["diag"], a["rhs"], d, n, self._dot, refresh, pc.tolerance,
+            res = pcg(apply, a["diag"], a["rhs"], d, n, self._dots, refresh, pc.tolerance,
                       pc.max_iterations, self._work)
         sv = self.stats
         sv["iterations"], sv["residual"] = res.iterations, res.residual
