@@ -9,7 +9,6 @@ state), and receives the same. A rank also keeps copies of its own migrants as h
 that step, since its neighbour packed its halo before knowing of them.
 """
 
-import math
 
 import numpy as np
 from mpi4py import MPI
@@ -22,16 +21,6 @@ from psph.state.particles import ParticleStore
 # parts of an expansion that `exact_sum` gathers in one fixed-size row (the chunk
 # accumulators of `psph.kernels.exact_sum` give at most 67; most sums need a handful)
 _SUM_SLOTS = 72
-
-
-def _fsum_or_nan(parts: list[np.ndarray]) -> float:
-    """`exact_total` of a few short expansions without its array copies: math.fsum is
-    correctly rounded; a non-finite term or an overflow gives NaN, as there."""
-    try:
-        total = math.fsum([v for p in parts for v in p.tolist()])
-    except (OverflowError, ValueError):  # ValueError: inf - inf
-        return math.nan
-    return total if math.isfinite(total) else math.nan
 
 
 def slab_cuts(coords: np.ndarray, nranks: int, min_width: float = 0.0) -> np.ndarray:
@@ -416,7 +405,7 @@ class Slabs:
         self.comm.Allgather(send, recv)
         lengths = recv[:, ::slots].astype(np.int64)
         if (lengths < slots).all():
-            return [_fsum_or_nan([recv[r, j * slots + 1:j * slots + 1 + lengths[r, j]]
+            return [exact_total([recv[r, j * slots + 1:j * slots + 1 + lengths[r, j]]
                                   for r in range(self.size)]) for j in range(k)]
         gathered = self.comm.allgather([np.ascontiguousarray(p) for p in parts])
         return [exact_total([g[j] for g in gathered]) for j in range(k)]

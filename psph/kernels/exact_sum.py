@@ -164,14 +164,14 @@ def local_parts(partials: np.ndarray, m: int) -> np.ndarray:
 
 def exact_total(parts: list[np.ndarray]) -> float:
     """Correctly rounded sum of the gathered expansions of all ranks (NaN if a term was
-    not finite or the sum overflows)."""
-    flat = np.concatenate(parts) if parts else np.zeros(0)
-    if not np.all(np.isfinite(flat)):
-        return math.nan
+    not finite or the sum overflows). math.fsum is correctly rounded; it is given the
+    parts as one Python list (no array copies: a CG solve on several ranks calls this
+    twice an iteration)."""
     try:
-        return math.fsum(flat.tolist())
-    except OverflowError:
+        total = math.fsum([v for p in parts for v in p.tolist()])
+    except (OverflowError, ValueError):  # ValueError: inf - inf
         return math.nan
+    return total if math.isfinite(total) else math.nan
 
 
 @nb.njit(cache=True)
