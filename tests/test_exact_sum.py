@@ -7,8 +7,13 @@ import numpy as np
 import pytest
 
 from psph.kernels.exact_sum import (
+    CHUNK_ROW,
     EXPANSION_CAP,
+    SPECIAL,
+    chunks_value,
+    dot_chunks,
     dot_expansion,
+    exact_dot,
     exact_total,
     local_parts,
     sum_expansion,
@@ -95,3 +100,42 @@ def test_subnormal_huge_and_zero_terms_are_summed_exactly():
     zeros = np.array([-0.0, -0.0])
     m = sum_expansion(zeros, 2, buf)
     assert m == 1 and math.copysign(1.0, buf[0]) == -1.0
+
+
+def _chunk_dot(a, b, cuts):
+    """dot_chunks of each part, the rows summed as integers (what one Allreduce does)."""
+    total = np.zeros(CHUNK_ROW, np.int64)
+    row = np.zeros(CHUNK_ROW, np.int64)
+    for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
+        dot_chunks(a[lo:hi], b[lo:hi], hi - lo, row)
+        total += row
+    return total
+
+
+def test_integer_chunks_summed_over_parts_give_the_exact_dot_bits():
+    """The CG's reduction on several ranks (`PressureSolve._dots`): chunk rows added as
+    integers, in any split, give exactly `exact_dot` of all terms (the one-rank solve)."""
+    rng = np.random.default_rng(7)
+    a = np.concatenate([rng.normal(size=600) * 10.0 ** rng.integers(-300, 280, 600),
+                        rng.normal(size=300) * 5e-324 * rng.integers(1, 2**20, 300)])
+    b = rng.normal(size=len(a)) * 10.0 ** rng.integers(-8, 8, len(a))
+    a[450:600] = -a[:150] * b[:150] / b[450:600] * (1 + 1e-13)  # heavy cancellation
+    buf = np.zeros(EXPANSION_CAP)
+    ref = exact_dot(a, b, len(a), buf)
+    assert ref == math.fsum((a * b).tolist())
+    for cuts in ([0, len(a)], [0, 1, 517, len(a)], [0, 300, 301, 302, len(a)]):
+        total = _chunk_dot(a, b, cuts)
+        assert total[SPECIAL] == 0
+        assert chunks_value(total, buf) == ref
+
+
+def test_integer_chunks_flag_huge_and_non_finite_terms_and_keep_signed_zeros():
+    buf = np.zeros(EXPANSION_CAP)
+    for bad in (np.inf, np.nan, 2.0 ** 1000):
+        assert _chunk_dot(np.array([1.0, bad]), np.ones(2), [0, 2])[SPECIAL] == 1
+    minus = _chunk_dot(np.array([-0.0, -0.0]), np.ones(2), [0, 1, 2])
+    assert math.copysign(1.0, chunks_value(minus, buf)) == -1.0
+    assert math.copysign(1.0, exact_dot(np.array([-0.0, -0.0]), np.ones(2), 2, buf)) == -1.0
+    mixed = _chunk_dot(np.array([-0.0, 0.0, 1.0, -1.0]), np.ones(4), [0, 2, 4])
+    assert math.copysign(1.0, chunks_value(mixed, buf)) == 1.0
+    assert chunks_value(_chunk_dot(np.zeros(0), np.zeros(0), [0, 0]), buf) == 0.0

@@ -298,14 +298,17 @@ class Slabs:
             self._row_map = np.zeros(max(n, 2 * self._row_map.shape[0]), np.int64)
         return self._row_map
 
-    def refresh_halo(self, field: np.ndarray) -> None:
-        """Overwrite the halo rows of `field` (cap, k) with the owners' current values,
-        for the same halo as the last `exchange` (no particle has moved since). Each
-        neighbour sends its halo rows for this rank, then its current rows of the
-        particles this rank handed it in that exchange."""
+    def refresh_halo(self, *fields: np.ndarray) -> None:
+        """Overwrite the halo rows of each field ((cap,) or (cap, k)) with the owners'
+        current values, for the same halo as the last `exchange` (no particle has moved
+        since): one message per neighbour for all the fields. Each neighbour sends its
+        halo rows for this rank, then its current rows of the particles this rank handed
+        it in that exchange."""
         if self.size == 1:
             return
-        width = field.shape[1]
+        cols = [f.reshape(f.shape[0], -1) for f in fields]
+        widths = [c.shape[1] for c in cols]
+        width = sum(widths)
         reqs = []
         for nbr, tag in ((self.down, 21), (self.up, 22)):
             if nbr == MPI.PROC_NULL:
@@ -313,8 +316,14 @@ class Slabs:
             halo_rows, (m0, nm), _, _ = self._refresh_plan[nbr]
             nh = len(halo_rows)
             buf = self._send_buffer(f"refresh{tag}", nh + nm, width)[:nh + nm]
-            np.take(field, halo_rows, axis=0, out=buf[:nh])
-            buf[nh:] = field[m0:m0 + nm]
+            j = 0
+            for c, w in zip(cols, widths, strict=True):
+                if len(cols) == 1:
+                    np.take(c, halo_rows, axis=0, out=buf[:nh])
+                else:
+                    buf[:nh, j:j + w] = c[halo_rows]
+                buf[nh:, j:j + w] = c[m0:m0 + nm]
+                j += w
             reqs.append(self.comm.Isend(buf, dest=nbr, tag=tag))
         for nbr, tag in ((self.down, 22), (self.up, 21)):
             if nbr == MPI.PROC_NULL:
@@ -322,8 +331,11 @@ class Slabs:
             _, _, (h0, nh), (o0, no) = self._refresh_plan[nbr]
             rbuf = self._send_buffer(f"refresh_in{tag}", nh + no, width)[:nh + no]
             self.comm.Recv(rbuf, source=nbr, tag=tag)
-            field[h0:h0 + nh] = rbuf[:nh]
-            field[o0:o0 + no] = rbuf[nh:]
+            j = 0
+            for c, w in zip(cols, widths, strict=True):
+                c[h0:h0 + nh] = rbuf[:nh, j:j + w]
+                c[o0:o0 + no] = rbuf[nh:, j:j + w]
+                j += w
         MPI.Request.Waitall(reqs)
 
     # --------------------------------------------------------------- load balance
@@ -382,6 +394,14 @@ class Slabs:
         out = np.empty_like(values)
         self.comm.Allreduce(values, out, op=MPI.SUM)
         return out
+
+    def allreduce_sum_into(self, values: np.ndarray, out: np.ndarray) -> None:
+        """out = the element-wise sum over ranks of `values` (preallocated, any dtype;
+        integers add exactly, in any order). Collective."""
+        if self.size == 1:
+            out[...] = values
+            return
+        self.comm.Allreduce(values, out, op=MPI.SUM)
 
     def exact_sum(self, parts: np.ndarray) -> float:
         """Correctly rounded sum over ranks of each rank's exact expansion `parts`

@@ -157,6 +157,81 @@ def sum_expansion(a: np.ndarray, n: int, partials: np.ndarray) -> int:
     return _finish(acc, partials, m, zero)
 
 
+# `dot_chunks` rows: the chunks, then four counts (summed over ranks like the chunks)
+CHUNK_ROW = _CHUNKS + 4
+SPECIAL, _POS_ZERO, _NEG_ZERO = _CHUNKS, _CHUNKS + 1, _CHUNKS + 2
+
+
+@nb.njit(cache=True)
+def dot_chunks(a: np.ndarray, b: np.ndarray, n: int, row: np.ndarray) -> None:
+    """The terms a[k] b[k], k < n, as integers: their chunk accumulators, carried so that
+    every chunk but the top one lies in [-2^31, 2^31), into row[:_CHUNKS] (int64,
+    CHUNK_ROW long), and the counts of terms the chunks cannot hold (at or above 2^_BIG
+    or not finite), of +0 and of -0 terms. Rows of several ranks add exactly (integer
+    sums, any order, 2^31 ranks before a chunk could overflow), so `chunks_value` of
+    their sum is the correctly rounded exact sum of all terms on any partition: one
+    integer Allreduce instead of a gather of expansions (the CG's collectives on
+    several ranks)."""
+    row[:] = 0
+    terms = np.empty(_BLOCK)
+    bits = terms.view(np.int64)
+    for start in range(0, n, _BLOCK):
+        count = min(_BLOCK, n - start)
+        for k in range(count):
+            terms[k] = a[start + k] * b[start + k]
+        for k in range(count):
+            w = bits[k]
+            ex = (w >> 52) & 0x7FF
+            frac = w & ((np.int64(1) << 52) - 1)
+            if ex == 0x7FF or ex >= _BIG + 1023:
+                row[SPECIAL] += 1
+                continue
+            if ex == 0 and frac == 0:
+                if w < 0:
+                    row[_NEG_ZERO] += 1
+                else:
+                    row[_POS_ZERO] += 1
+                continue
+            mant = frac | (np.int64(1) << 52) if ex > 0 else frac
+            s = ex - 1 if ex > 0 else 0
+            ci = s >> 5
+            sh = s & 31
+            lo = (mant & ((np.int64(1) << (32 - sh)) - 1)) << sh
+            mid = (mant >> (32 - sh)) & _MASK
+            hi = (mant >> 32) >> (32 - sh)
+            if w < 0:
+                row[ci] -= lo
+                row[ci + 1] -= mid
+                row[ci + 2] -= hi
+            else:
+                row[ci] += lo
+                row[ci + 1] += mid
+                row[ci + 2] += hi
+        if (start // _BLOCK) % 65536 == 65535:  # 2^24 terms: carry long before 2^31
+            _carry(row)
+    _carry(row)
+
+
+@nb.njit(cache=True)
+def _carry(acc: np.ndarray) -> None:
+    for i in range(_CHUNKS - 1):
+        carry = (acc[i] + (np.int64(1) << 31)) >> 32
+        acc[i] -= carry << 32
+        acc[i + 1] += carry
+
+
+@nb.njit(cache=True)
+def chunks_value(row: np.ndarray, partials: np.ndarray) -> float:
+    """The correctly rounded value of a (summed) `dot_chunks` row, as `exact_dot` of all
+    the terms gives it (-0.0 when the non-zero terms cancel or are absent and every zero
+    term is -0.0). Call only when row[SPECIAL] == 0 (else the caller sums expansions)."""
+    acc = row[:_CHUNKS].copy()
+    m = _chunks_to_expansion(acc, partials, 0)
+    if m == 0:
+        return -0.0 if row[_NEG_ZERO] > 0 and row[_POS_ZERO] == 0 else 0.0
+    return rounded_sum(partials, m)
+
+
 def local_parts(partials: np.ndarray, m: int) -> np.ndarray:
     """The expansion as an array to gather (a non-finite term as a single part)."""
     return partials[:1] if m < 0 else partials[:m]

@@ -8,7 +8,15 @@ import math
 
 import numpy as np
 
-from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, local_parts
+from psph.kernels.exact_sum import (
+    CHUNK_ROW,
+    EXPANSION_CAP,
+    SPECIAL,
+    chunks_value,
+    dot_chunks,
+    dot_expansion,
+    local_parts,
+)
 from psph.kernels.images import image_weights
 from psph.kernels.laplacian import (
     apply_scaled,
@@ -39,6 +47,8 @@ class PressureSolve:
         self._buf = np.zeros(EXPANSION_CAP)
         self._bufs: list[np.ndarray] = []
         self._ones = np.zeros(0)
+        self._rows = np.zeros((0, CHUNK_ROW), np.int64)
+        self._rows_sum = np.zeros((0, CHUNK_ROW), np.int64)
 
     def _arrays(self, cap: int, n_pairs: int) -> dict:
         a = self._a
@@ -135,13 +145,26 @@ class PressureSolve:
         return self._dots((a, b))[0]
 
     def _dots(self, *pairs: tuple[np.ndarray, np.ndarray]) -> list[float]:
-        """Inner products over the owned rows, in one collective."""
+        """Inner products over the owned rows, in one collective: each rank's terms as
+        integer chunks (`exact_sum.dot_chunks`), summed by one integer Allreduce; the
+        same correctly rounded values as gathering the ranks' expansions, which a term
+        the chunks cannot hold (huge or not finite, on any rank) falls back to."""
         n = self.sim.store.n_owned
-        if len(self._bufs) < len(pairs):
-            self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
-        parts = [local_parts(buf, dot_expansion(a, b, n, buf))
-                 for (a, b), buf in zip(pairs, self._bufs, strict=False)]
-        return self.sim.slabs.exact_sums(parts)
+        k = len(pairs)
+        if self._rows.shape[0] != k:
+            self._rows = np.zeros((k, CHUNK_ROW), np.int64)
+            self._rows_sum = np.zeros((k, CHUNK_ROW), np.int64)
+        for row, (a, b) in zip(self._rows, pairs, strict=True):
+            dot_chunks(a, b, n, row)
+        total = self._rows_sum
+        self.sim.slabs.allreduce_sum_into(self._rows, total)
+        if total[:, SPECIAL].any():
+            if len(self._bufs) < k:
+                self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
+            parts = [local_parts(buf, dot_expansion(a, b, n, buf))
+                     for (a, b), buf in zip(pairs, self._bufs, strict=False)]
+            return self.sim.slabs.exact_sums(parts)
+        return [chunks_value(row, self._buf) for row in total]
 
     def project(self) -> None:
         """p^(n+1) = p^n + dp from one solve of Eq. (29) (module `psph.kernels.projection`),

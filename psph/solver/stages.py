@@ -285,9 +285,7 @@ class Stages:
             return
         self.pressure_solve.project()
         st = self.store
-        self.slabs.refresh_halo(st.v)
-        self.slabs.refresh_halo(st.p.reshape(-1, 1))
-        self.slabs.refresh_halo(st.p_prev.reshape(-1, 1))
+        self.slabs.refresh_halo(st.v, st.p, st.p_prev)
         self._refresh_walls()
         velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g,
                                st.v, self.v_slip, st.poro, st.vol, self.coupled, self.sums)
