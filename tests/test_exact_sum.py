@@ -7,9 +7,12 @@ import numpy as np
 import pytest
 
 from psph.kernels.exact_sum import (
+    BLOCK,
     CHUNK_ROW,
+    CHUNKS,
     EXPANSION_CAP,
     SPECIAL,
+    chunked_dot,
     chunks_value,
     dot_chunks,
     dot_expansion,
@@ -107,7 +110,7 @@ def _chunk_dot(a, b, cuts):
     total = np.zeros(CHUNK_ROW, np.int64)
     row = np.zeros(CHUNK_ROW, np.int64)
     for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
-        dot_chunks(a[lo:hi], b[lo:hi], hi - lo, row)
+        dot_chunks(a[lo:hi], b[lo:hi], hi - lo, row, np.zeros(BLOCK))
         total += row
     return total
 
@@ -126,7 +129,7 @@ def test_integer_chunks_summed_over_parts_give_the_exact_dot_bits():
     for cuts in ([0, len(a)], [0, 1, 517, len(a)], [0, 300, 301, 302, len(a)]):
         total = _chunk_dot(a, b, cuts)
         assert total[SPECIAL] == 0
-        assert chunks_value(total, buf) == ref
+        assert chunks_value(total, buf, np.zeros(CHUNKS, np.int64)) == ref
 
 
 def test_integer_chunks_flag_huge_and_non_finite_terms_and_keep_signed_zeros():
@@ -134,8 +137,27 @@ def test_integer_chunks_flag_huge_and_non_finite_terms_and_keep_signed_zeros():
     for bad in (np.inf, np.nan, 2.0 ** 1000):
         assert _chunk_dot(np.array([1.0, bad]), np.ones(2), [0, 2])[SPECIAL] == 1
     minus = _chunk_dot(np.array([-0.0, -0.0]), np.ones(2), [0, 1, 2])
-    assert math.copysign(1.0, chunks_value(minus, buf)) == -1.0
+    assert math.copysign(1.0, chunks_value(minus, buf, np.zeros(CHUNKS, np.int64))) == -1.0
     assert math.copysign(1.0, exact_dot(np.array([-0.0, -0.0]), np.ones(2), 2, buf)) == -1.0
     mixed = _chunk_dot(np.array([-0.0, 0.0, 1.0, -1.0]), np.ones(4), [0, 2, 4])
-    assert math.copysign(1.0, chunks_value(mixed, buf)) == 1.0
-    assert chunks_value(_chunk_dot(np.zeros(0), np.zeros(0), [0, 0]), buf) == 0.0
+    assert math.copysign(1.0, chunks_value(mixed, buf, np.zeros(CHUNKS, np.int64))) == 1.0
+    empty = _chunk_dot(np.zeros(0), np.zeros(0), [0, 0])
+    assert chunks_value(empty, buf, np.zeros(CHUNKS, np.int64)) == 0.0
+
+
+def test_chunked_dot_is_exact_dot_bit_for_bit():
+    """`chunked_dot` (the one-rank CG's inner products) against `exact_dot`: ordinary
+    terms through the chunks, huge and non-finite ones through the expansion, signed zeros."""
+    rng = np.random.default_rng(11)
+    row, terms = np.zeros(CHUNK_ROW, np.int64), np.zeros(BLOCK)
+    acc, buf = np.zeros(CHUNKS, np.int64), np.zeros(EXPANSION_CAP)
+    a = rng.normal(size=700) * 10.0 ** rng.integers(-200, 200, 700)
+    b = rng.normal(size=700)
+    cases = [(a, b), (np.array([1e300, 3.0, -1e300]), np.array([1e10, 1.0, 1e10])),
+             (np.array([np.inf, 1.0]), np.ones(2)), (np.array([-0.0, -0.0]), np.ones(2)),
+             (np.zeros(0), np.zeros(0))]
+    for x, y in cases:
+        got = chunked_dot(x, y, len(x), row, terms, acc, buf)
+        ref = exact_dot(x, y, len(x), buf)
+        assert (math.isnan(got) and math.isnan(ref)) or \
+            (got == ref and math.copysign(1.0, got) == math.copysign(1.0, ref)), (got, ref)

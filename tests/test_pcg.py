@@ -10,7 +10,15 @@ import math
 import numpy as np
 import pytest
 
-from psph.kernels.exact_sum import EXPANSION_CAP, dot_expansion, exact_total, local_parts
+from psph.kernels.exact_sum import (
+    BLOCK,
+    CHUNK_ROW,
+    CHUNKS,
+    EXPANSION_CAP,
+    dot_expansion,
+    exact_total,
+    local_parts,
+)
 from psph.kernels.laplacian import (
     apply_operator,
     fixed_rhs,
@@ -163,7 +171,9 @@ def test_compiled_serial_pcg_gives_the_same_bits():
     operator_coefficients(n, len(pairs), pairs, w, w_off, vol, s, c_diag, c_off, c_storage)
     it, r, ok = pcg_serial(n, n, len(pairs), pairs, c_diag, c_off, c_storage, fixed, diag, rhs,
                            p_nb,
-                           np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.z, wk.d,
-                           wk.sd, np.zeros(EXPANSION_CAP))
+                           np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.u,
+                           wk.w, wk.d, wk.sd, np.zeros(EXPANSION_CAP),
+                           np.zeros(CHUNK_ROW, np.int64), np.zeros(BLOCK),
+                           np.zeros(CHUNKS, np.int64))
     assert res.converged and ok and it == res.iterations and r == res.residual
     assert np.array_equal(p_nb, p_py)

@@ -165,3 +165,26 @@ def cg_step(n: int, alpha: float, d: np.ndarray, sd: np.ndarray, x: np.ndarray,
         x[i] += alpha * d[i]
         r[i] -= alpha * sd[i]
 
+
+@nb.njit(cache=True, error_model="numpy")  # x / 0 -> inf as numpy, not an exception
+def jacobi(n: int, r: np.ndarray, diag: np.ndarray, u: np.ndarray) -> None:
+    """u = r / diag on the first n rows: the Jacobi preconditioner."""
+    for i in range(n):
+        u[i] = r[i] / diag[i]
+
+
+@nb.njit(cache=True)
+def cg_directions(n: int, beta: float, u: np.ndarray, w: np.ndarray, d: np.ndarray,
+                  sd: np.ndarray) -> None:
+    """d = u + beta d and sd = w + beta sd on the first n rows: the search direction and,
+    by linearity, its image S d (w = S u), so a CG iteration applies S once, to u. With
+    beta = 0 (the first direction) d = u and sd = w, whatever d and sd held before."""
+    if beta == 0.0:
+        for i in range(n):
+            d[i] = u[i]
+            sd[i] = w[i]
+        return
+    for i in range(n):
+        d[i] = u[i] + beta * d[i]
+        sd[i] = w[i] + beta * sd[i]
+

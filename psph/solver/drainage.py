@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from psph.config.boundaries import SIDE_PLANES as SIDES
-from psph.kernels.exact_sum import EXPANSION_CAP, local_parts, sum_expansion
+from psph.kernels.exact_sum import BLOCK, CHUNKS, EXPANSION_CAP, local_parts, sum_expansion_into
 from psph.kernels.images import row_displacement
 
 
@@ -51,6 +51,8 @@ class Drainage:
             self.planes[q] = (axis, self.pos0[q], sign, 0.0)
         self._row = np.zeros(0)
         self._parts = np.zeros(EXPANSION_CAP)
+        self._acc, self._terms = np.zeros(CHUNKS, np.int64), np.zeros(BLOCK)
+        self._zero = np.zeros(2)
 
     @property
     def has_planes(self) -> bool:
@@ -78,7 +80,8 @@ class Drainage:
                 self._row = np.zeros(store.cap)
             m = row_displacement(store.n_owned, store.x, store.u, axis, pos, sign, self.dx,
                                  self._row)
-            k = sum_expansion(self._row, m, self._parts)
+            k = sum_expansion_into(self._row, m, self._parts, self._acc, self._terms,
+                                   self._zero)
             total, count = slabs.exact_sums([local_parts(self._parts, k), np.array([float(m)])])
             if count > 0:
                 self.planes[q, 1] = self.pos0[q] + total / count

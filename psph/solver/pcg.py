@@ -5,9 +5,16 @@ The operator, its diagonal and the halo refresh are passed in, so this module kn
 equation and no communicator: `apply(q, out)` writes S q on the owned rows, `refresh(q)`
 brings the halo (and wall-ghost) rows of a search direction up to date, and
 `dots((a, b), ...)` gives collective, partition-independent inner products over the owned
-rows, several in one collective (the exact sums of `psph.kernels.exact_sum`; two
-collectives an iteration). With all three reproducible, the iterates, the iteration count
-and the solution are the same bits on any rank count.
+rows, several in one collective (the exact sums of `psph.kernels.exact_sum`). With all
+three reproducible, the iterates, the iteration count and the solution are the same bits
+on any rank count.
+
+The recurrences are Chronopoulos and Gear's (1989, "s-step iterative methods for symmetric
+linear systems", J. Comput. Appl. Math. 25): the same iterates as Hestenes-Stiefel CG in
+exact arithmetic, but the three inner products of an iteration, (r, r), (r, u) and
+(S u, u) with u the preconditioned residual, are taken at one point, so an iteration is
+one halo refresh and one collective (it was two collectives), and S d follows from
+S u by the recurrence S d = S u + beta S d.
 """
 
 from __future__ import annotations
@@ -18,22 +25,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from psph.kernels.laplacian import cg_step
+from psph.kernels.laplacian import cg_directions, cg_step, jacobi
 
 
 @dataclass
 class PCGWork:
-    """Scratch vectors of length `cap` (grown, never per iteration)."""
+    """Scratch vectors of length `cap` (grown, never per iteration): the residual r, the
+    preconditioned residual u, its image w = S u, the search direction d and its image sd."""
     cap: int = 0
     r: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    z: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    u: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    w: np.ndarray = field(default_factory=lambda: np.zeros(0))
     d: np.ndarray = field(default_factory=lambda: np.zeros(0))
     sd: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def ensure(self, cap: int) -> None:
         if cap > self.cap:
             self.cap = cap
-            self.r, self.z, self.d, self.sd = (np.zeros(cap) for _ in range(4))
+            self.r, self.u, self.w, self.d, self.sd = (np.zeros(cap) for _ in range(5))
 
 
 @dataclass
@@ -55,35 +64,37 @@ def pcg(apply: Callable[[np.ndarray, np.ndarray], None], diag: np.ndarray, rhs: 
     refreshed."""
     n = n_owned
     work.ensure(x.shape[0])
-    r, z, d, sd = work.r, work.z, work.d, work.sd
-    apply(x, sd)
-    np.subtract(rhs[:n], sd[:n], out=r[:n])
-    np.divide(r[:n], diag[:n], out=z[:n])
-    bb, rr, rz = dots((rhs, rhs), (r, r), (r, z))
+    r, u, w, d, sd = work.r, work.u, work.w, work.d, work.sd
+    apply(x, w)
+    np.subtract(rhs[:n], w[:n], out=r[:n])
+    jacobi(n, r, diag, u)
+    refresh(u)
+    apply(u, w)
+    bb, rr, ru, wu = dots((rhs, rhs), (r, r), (r, u), (w, u))
     b_norm = math.sqrt(bb)
     if b_norm == 0.0:
         b_norm = 1.0
     res = math.sqrt(rr) / b_norm
     if res <= tol:
         return PCGResult(0, res, True)
-    d[:n] = z[:n]
+    d_sd = wu  # (d, S d) with d = u
+    beta = 0.0
     for it in range(1, maxiter + 1):
-        refresh(d)
-        apply(d, sd)
-        (dsd,) = dots((d, sd))
-        if not (dsd > 0.0 and math.isfinite(dsd)):
-            return PCGResult(it, math.nan if not math.isfinite(dsd) else res, False)
-        alpha = rz / dsd
+        if not (d_sd > 0.0 and math.isfinite(d_sd)):
+            return PCGResult(it, math.nan if not math.isfinite(d_sd) else res, False)
+        alpha = ru / d_sd
+        cg_directions(n, beta, u, w, d, sd)
         cg_step(n, alpha, d, sd, x, r)
-        np.divide(r[:n], diag[:n], out=z[:n])
-        rr, rz_new = dots((r, r), (r, z))
+        jacobi(n, r, diag, u)
+        refresh(u)
+        apply(u, w)
+        rr, ru_new, wu = dots((r, r), (r, u), (w, u))
         res = math.sqrt(rr) / b_norm
         if res <= tol:
             return PCGResult(it, res, True)
-        if rz == 0.0:  # breakdown (a non-positive preconditioner): not converged
+        if ru == 0.0:  # breakdown (a non-positive preconditioner): not converged
             return PCGResult(it, res, False)
-        beta = rz_new / rz
-        rz = rz_new
-        d[:n] *= beta
-        d[:n] += z[:n]
+        beta = ru_new / ru
+        d_sd = wu - beta * ru_new / alpha  # (d, S d) of the next direction
+        ru = ru_new
     return PCGResult(maxiter, res, False)

@@ -9,7 +9,9 @@ import math
 import numpy as np
 
 from psph.kernels.exact_sum import (
+    BLOCK,
     CHUNK_ROW,
+    CHUNKS,
     EXPANSION_CAP,
     SPECIAL,
     chunks_value,
@@ -49,6 +51,9 @@ class PressureSolve:
         self._ones = np.zeros(0)
         self._rows = np.zeros((0, CHUNK_ROW), np.int64)
         self._rows_sum = np.zeros((0, CHUNK_ROW), np.int64)
+        self._terms = np.zeros(BLOCK)
+        self._acc = np.zeros(CHUNKS, np.int64)
+        self._row = np.zeros(CHUNK_ROW, np.int64)
 
     def _arrays(self, cap: int, n_pairs: int) -> dict:
         a = self._a
@@ -155,7 +160,7 @@ class PressureSolve:
             self._rows = np.zeros((k, CHUNK_ROW), np.int64)
             self._rows_sum = np.zeros((k, CHUNK_ROW), np.int64)
         for row, (a, b) in zip(self._rows, pairs, strict=True):
-            dot_chunks(a, b, n, row)
+            dot_chunks(a, b, n, row, self._terms)
         total = self._rows_sum
         self.sim.slabs.allreduce_sum_into(self._rows, total)
         if total[:, SPECIAL].any():
@@ -164,7 +169,7 @@ class PressureSolve:
             parts = [local_parts(buf, dot_expansion(a, b, n, buf))
                      for (a, b), buf in zip(pairs, self._bufs, strict=False)]
             return self.sim.slabs.exact_sums(parts)
-        return [chunks_value(row, self._buf) for row in total]
+        return [chunks_value(row, self._buf, self._acc) for row in total]
 
     def project(self) -> None:
         """p^(n+1) = p^n + dp from one solve of Eq. (29) (module `psph.kernels.projection`),
@@ -207,8 +212,8 @@ class PressureSolve:
             res = PCGResult(*pcg_serial(n, nt, npairs, sim.pairs, a["c_diag"], a["c_off"],
                                         a["c_storage"], fixed, a["diag"], a["rhs"], d,
                                         sim.ghost_src, sim.ghost_sign, pc.tolerance,
-                                        pc.max_iterations, wk.r, wk.z, wk.d, wk.sd,
-                                        self._buf))
+                                        pc.max_iterations, wk.r, wk.u, wk.w, wk.d, wk.sd,
+                                        self._buf, self._row, self._terms, self._acc))
         else:
             res = pcg(apply, a["diag"], a["rhs"], d, n, self._dots, refresh, pc.tolerance,
                       pc.max_iterations, self._work)
