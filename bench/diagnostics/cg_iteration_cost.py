@@ -6,6 +6,9 @@ refresh, the inner products (`dots`) and, inside them, the integer Allreduce.
 
     mpirun -n 2 .venv/bin/python bench/diagnostics/cg_iteration_cost.py   # ~20 s
     mpirun -n 2 .venv/bin/python bench/diagnostics/cg_iteration_cost.py --until 0.3
+    git worktree add /tmp/base 52b1709 && ln -s $PWD/.venv /tmp/base/.venv
+    mpirun -n 2 env PYTHONPATH=/tmp/base .venv/bin/python \
+        bench/diagnostics/cg_iteration_cost.py --tag 52b1709     # the revision before
 
 Prints a table (microseconds per CG iteration, rank 0), writes
 bench/out/cg_iteration_cost-np<P>.json and .png (a bar per part).
@@ -55,7 +58,9 @@ def measure(until: float) -> dict:
     solve_module.pcg = timed("pcg", pcg_timed, seconds)
     solve.project = timed("project", solve.project, seconds)
     solve._system = timed("system", solve._system, seconds)
-    sim.slabs.allreduce_sum_into = timed("allreduce", sim.slabs.allreduce_sum_into, seconds)
+    if hasattr(sim.slabs, "allreduce_sum_into"):  # absent before the chunk rows (c03b0b5)
+        sim.slabs.allreduce_sum_into = timed("allreduce", sim.slabs.allreduce_sum_into,
+                                             seconds)
     while sim.t < 0.05:
         sim.advance_one()
     seconds.clear()
@@ -73,12 +78,15 @@ def measure(until: float) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--until", type=float, default=0.15, help="end of the timed window, s")
+    ap.add_argument("--tag", default="", help="suffix of the output files (another revision)")
     args = ap.parse_args()
     row = measure(args.until)
     rows = MPI.COMM_WORLD.gather(row)
     if MPI.COMM_WORLD.rank:
         return
     r = rows[0]
+    import psph
+    print(f"psph from {Path(psph.__file__).parent}")
     print(f"{r['ranks']} ranks, {r['steps']} steps, {r['iterations_per_step']:.2f} CG "
           f"iterations a step, {r['wall_us_per_step']:.0f} us a step")
     print("| part | " + " | ".join(f"rank {i} us/iteration" for i in range(len(rows))) + " |")
@@ -86,7 +94,7 @@ def main() -> None:
     for k in PARTS:
         print(f"| {k} | " + " | ".join(f"{x['us_per_iteration'][k]:.0f}" for x in rows) + " |")
     OUT.mkdir(exist_ok=True)
-    stem = OUT / f"cg_iteration_cost-np{r['ranks']}"
+    stem = OUT / (f"cg_iteration_cost-np{r['ranks']}" + (f"-{args.tag}" if args.tag else ""))
     stem.with_suffix(".json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.node(), "ranks": rows},
         indent=1))
