@@ -74,6 +74,28 @@ BLOCK = _BLOCK
 CHUNKS = _CHUNKS
 
 
+@nb.njit(cache=True, inline="always")
+def _add_to_chunks(acc: np.ndarray, w: np.int64, ex: np.int64, frac: np.int64) -> None:
+    """Add the finite, non-zero double of bits w (exponent field ex, fraction frac, below
+    2^_BIG) to the chunk accumulators: |x| = mant 2^(s - 1074), s = ex - 1 for a normal
+    number, 0 for a subnormal, the 53-bit mant split over the three chunks it spans."""
+    mant = frac | (np.int64(1) << 52) if ex > 0 else frac
+    s = ex - 1 if ex > 0 else 0
+    ci = s >> 5
+    sh = s & 31
+    lo = (mant & ((np.int64(1) << (32 - sh)) - 1)) << sh
+    mid = (mant >> (32 - sh)) & _MASK
+    hi = (mant >> 32) >> (32 - sh)
+    if w < 0:
+        acc[ci] -= lo
+        acc[ci + 1] -= mid
+        acc[ci + 2] -= hi
+    else:
+        acc[ci] += lo
+        acc[ci + 1] += mid
+        acc[ci + 2] += hi
+
+
 @nb.njit(cache=True)
 def _add_block(terms: np.ndarray, count: int, acc: np.ndarray, partials: np.ndarray,
                m: int, zero: np.ndarray) -> int:
@@ -96,22 +118,7 @@ def _add_block(terms: np.ndarray, count: int, acc: np.ndarray, partials: np.ndar
         if ex >= _BIG + 1023:
             m = _grow(partials, m, terms[k])
             continue
-        # |x| = mant 2^(s - 1074): s = ex - 1 for a normal number, 0 for a subnormal
-        mant = frac | (np.int64(1) << 52) if ex > 0 else frac
-        s = ex - 1 if ex > 0 else 0
-        ci = s >> 5
-        sh = s & 31
-        lo = (mant & ((np.int64(1) << (32 - sh)) - 1)) << sh
-        mid = (mant >> (32 - sh)) & _MASK
-        hi = (mant >> 32) >> (32 - sh)
-        if w < 0:
-            acc[ci] -= lo
-            acc[ci + 1] -= mid
-            acc[ci + 2] -= hi
-        else:
-            acc[ci] += lo
-            acc[ci + 1] += mid
-            acc[ci + 2] += hi
+        _add_to_chunks(acc, w, ex, frac)
     return m
 
 
@@ -203,21 +210,7 @@ def dot_chunks(a: np.ndarray, b: np.ndarray, n: int, row: np.ndarray,
                 else:
                     row[_POS_ZERO] += 1
                 continue
-            mant = frac | (np.int64(1) << 52) if ex > 0 else frac
-            s = ex - 1 if ex > 0 else 0
-            ci = s >> 5
-            sh = s & 31
-            lo = (mant & ((np.int64(1) << (32 - sh)) - 1)) << sh
-            mid = (mant >> (32 - sh)) & _MASK
-            hi = (mant >> 32) >> (32 - sh)
-            if w < 0:
-                row[ci] -= lo
-                row[ci + 1] -= mid
-                row[ci + 2] -= hi
-            else:
-                row[ci] += lo
-                row[ci + 1] += mid
-                row[ci + 2] += hi
+            _add_to_chunks(row, w, ex, frac)
         if (start // _BLOCK) % 65536 == 65535:  # 2^24 terms: carry long before 2^31
             _carry(row)
     _carry(row)
