@@ -1,5 +1,6 @@
 """Small particle sets for kernel tests, and a temporary directory shared by MPI ranks."""
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -56,35 +57,7 @@ def shared_tmp(comm, tmp_path_factory) -> Path:
     return Path(comm.bcast(path, root=0))
 
 
-FALLING_BLOCK = """
-name = "falling_far"
-description = "a dry elastic block falls through the whole slab layout onto the floor"
-gravity = [0.0, -9.81]
-[domain]
-min = [0.0, 0.0]
-max = [0.3, 2.0]
-[particles]
-dx = 0.01
-[[particles.blocks]]
-min = [0.0, 0.7]
-max = [0.3, 1.3]
-[material]
-E = 5.0e6
-nu = 0.3
-porosity = 0.4
-rho_s = 2000.0
-k = 1.0e-3
-[boundaries]
-left = { motion = "slip" }
-right = { motion = "slip" }
-bottom = { motion = "fixed" }
-[pressure]
-scheme = "none"
-[time]
-end = 0.4
-[output]
-interval = 0.05
-"""
+SCENES = Path(__file__).resolve().parent / "scenes"  # scene files tests and benches share
 
 
 def falling_far(tmp: Path) -> Path:
@@ -92,7 +65,7 @@ def falling_far(tmp: Path) -> Path:
     ends below the first cut (migration), and the upper rank runs empty unless the slabs
     are recut (load imbalance)."""
     f = tmp / "falling_far.toml"
-    f.write_text(FALLING_BLOCK)
+    shutil.copyfile(SCENES / "falling_far.toml", f)
     return f
 
 

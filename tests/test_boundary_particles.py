@@ -12,7 +12,7 @@ from psph.geometry.polylines import _nearest_on_polyline, boundary_particles
 from psph.io.snapshots import read_snapshots
 from psph.kernels.boundary import MOTION_FIXED, boundary_state
 from psph.kernels.neighbours import cell_lists
-from tests.helpers import assert_bad_input
+from tests.helpers import SCENES, assert_bad_input
 from tests.test_bad_input import run_cli
 
 DX = 0.02
@@ -307,53 +307,6 @@ def test_projection_with_polylines_is_refused():
 
 # ------------------------------------------------------------------ a dipping base
 
-DIPPING = """
-name = "dipping_base"
-gravity = [0.0, -9.81]
-[domain]
-min = [0.0, 0.0]
-max = [40.0, 8.0]
-[particles]
-dx = 0.5
-[[particles.layers]]
-top = [[0.0, 6.0], [40.0, 6.0]]
-bottom = [[-1.0, 2.0349], [41.0, 0.5676]]
-[material]
-E = 60.0e6
-nu = 0.3
-porosity = 0.3
-rho_s = 2700.0
-k = 1.0e-6
-K_l = 1.0e8
-[[boundaries.polylines]]
-points = [[-1.0, 2.0349], [41.0, 0.5676]]
-soil = "above"
-motion = "friction"
-friction_angle = 20.0
-rows = "{rows}"
-[boundaries]
-left = {{ motion = "slip" }}
-right = {{ motion = "slip" }}
-[initial]
-water_table = 6.0
-k0 = 0.5
-equilibrate = 0.5
-[pressure]
-scheme = "explicit"
-ponding = true
-[time]
-integrator = "symplectic"
-dt = 4.0e-4
-allow_dt_above_solid_limit = true
-end = 0.2
-[output]
-interval = 0.1
-[stabilisation]
-shepard_every = 30
-shepard_stress = true
-stress_filter = "mls"
-"""
-
 
 def test_a_saturated_layer_at_rest_on_a_dipping_polyline_keeps_its_pressure(tmp_path):
     """A 4-5 m saturated elastic layer (the till of slope_section) at rest on a 2 degree
@@ -367,8 +320,7 @@ def test_a_saturated_layer_at_rest_on_a_dipping_polyline_keeps_its_pressure(tmp_
     varying gap into stripes (rows = "line"): -56.5 to 40.4 kPa, base spread 88.5 kPa."""
     from psph.verify.pressure import excess_pressure
 
-    f = tmp_path / "dip.toml"
-    f.write_text(DIPPING.format(rows="lattice"))
+    f = SCENES / "dipping_base.toml"
     snaps = _run(f, tmp_path)
     scene = load_scene(str(f))
     for s in snaps[1:]:

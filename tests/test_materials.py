@@ -12,7 +12,7 @@ from psph.app.run import make_slabs, run
 from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
 from psph.physics.initial import initial_particles
-from tests.helpers import assert_bad_input
+from tests.helpers import SCENES, assert_bad_input
 
 G = 9.81
 RHO_L = 1000.0
@@ -21,54 +21,7 @@ LIGHT = {"porosity": 0.5, "rho_s": 1800.0}
 DENSE = {"porosity": 0.35, "rho_s": 2650.0}
 WATER_TABLE = 1.975
 
-LAYERED = """
-name = "two_layers"
-gravity = [0.0, -9.81]
-[domain]
-min = [0.0, 0.0]
-max = [0.4, 2.0]
-[particles]
-dx = 0.05
-[[particles.blocks]]
-min = [0.0, 0.0]
-max = [0.4, 1.0]
-material = "dense"
-[[particles.blocks]]
-min = [0.0, 1.0]
-max = [0.4, 2.0]
-material = "light"
-[[materials]]
-name = "dense"
-E = 20.0e6
-nu = 0.33
-porosity = 0.35
-rho_s = 2650.0
-k = 2.0e-4
-[[materials]]
-name = "light"
-E = 20.0e6
-nu = 0.33
-porosity = 0.5
-rho_s = 1800.0
-k = 2.0e-4
-[boundaries]
-left = { motion = "slip" }
-right = { motion = "slip" }
-bottom = { motion = "fixed" }
-top = { motion = "free", flow = "drained" }
-[initial]
-water_table = 1.975
-k0 = 0.5
-[pressure]
-scheme = "explicit"
-drained_boundary = "layer"
-[time]
-end = 0.05
-[output]
-interval = 0.05
-[stabilisation]
-damping = 0.02
-"""
+LAYERED = (SCENES / "two_layers.toml").read_text()
 
 
 def _write(tmp_path, text, name="scene.toml"):

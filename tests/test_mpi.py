@@ -6,6 +6,7 @@ block moves every particle across the slab cut, so migration is exercised too.
 """
 
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ import pytest
 from psph.app.run import run
 from psph.config.load import load_scene
 from psph.io.snapshots import read_snapshots
-from tests.helpers import shared_tmp
+from tests.helpers import SCENES, shared_tmp
 
 COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification.tv=[]",
           "output.times=[0.005, 0.012]"]  # explicit loading, drain at 0.01 s, then TPI
@@ -24,34 +25,7 @@ PROJECTION = ["pressure.scheme='projection'", "time.integrator='symplectic'",
 
 def falling_block(tmp: Path) -> Path:
     f = tmp / "falling.toml"
-    f.write_text("""
-name = "falling"
-gravity = [0.0, -9.81]
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 1.0]
-[particles]
-dx = 0.02
-[[particles.blocks]]
-min = [0.0, 0.3]
-max = [0.2, 0.9]
-[material]
-E = 1.0e6
-nu = 0.3
-porosity = 0.4
-rho_s = 2000.0
-k = 1.0e-3
-[boundaries]
-left = { motion = "slip" }
-right = { motion = "slip" }
-bottom = { motion = "fixed" }
-[pressure]
-scheme = "none"
-[time]
-end = 0.3
-[stabilisation]
-damping = 0.05
-""")
+    shutil.copyfile(SCENES / "falling.toml", f)
     return f
 
 
@@ -519,14 +493,9 @@ def test_layered_k0_set_up_one_vs_two_ranks_bitwise(tmp_path_factory, axis):
 
     from psph.app.run import make_slabs
     from psph.physics.initial import initial_particles
-    from tests.test_materials import LAYERED
 
     comm = MPI.COMM_WORLD
-    out = shared_tmp(comm, tmp_path_factory)
-    if comm.Get_rank() == 0:
-        (out / "layered.toml").write_text(LAYERED)
-    comm.Barrier()
-    scene = load_scene(str(out / "layered.toml"), [f"decomposition.axis='{axis}'"])
+    scene = load_scene(str(SCENES / "two_layers.toml"), [f"decomposition.axis='{axis}'"])
     slabs = make_slabs(scene, comm)
     local = initial_particles(scene, slabs.reducer, slabs.slab)
     whole = initial_particles(scene)

@@ -32,45 +32,8 @@ COLUMN = ["particles.dx=0.02", "material.k=8e-4", "time.end=0.02", "verification
           "output.times=[0.005,0.012]", "stabilisation.shepard_every=7", "pressure.beta=0.04"]
 
 
-# the scene of tests/helpers.py: falling_far
-FALLING_BLOCK = """
-name = "falling_far"
-description = "a dry elastic block falls through the whole slab layout onto the floor"
-gravity = [0.0, -9.81]
-[domain]
-min = [0.0, 0.0]
-max = [0.3, 2.0]
-[particles]
-dx = 0.01
-[[particles.blocks]]
-min = [0.0, 0.7]
-max = [0.3, 1.3]
-[material]
-E = 5.0e6
-nu = 0.3
-porosity = 0.4
-rho_s = 2000.0
-k = 1.0e-3
-[boundaries]
-left = { motion = "slip" }
-right = { motion = "slip" }
-bottom = { motion = "fixed" }
-[pressure]
-scheme = "none"
-[time]
-end = 0.4
-[output]
-interval = 0.05
-"""
-
-
-def falling_far(tmp: Path) -> Path:
-    """A dry block that falls through the whole slab layout: on 2 ranks every particle
-    ends below the first cut (migration), and the upper rank runs empty unless the slabs
-    are recut (load imbalance)."""
-    f = tmp / "falling_far.toml"
-    f.write_text(FALLING_BLOCK)
-    return f
+# the falling block of tests/helpers.py (tests/scenes/falling_far.toml)
+FALLING_FAR = ROOT / "tests" / "scenes" / "falling_far.toml"
 
 
 def run_case(scene: str, sets: list[str], ranks: int, out: Path) -> dict:
@@ -104,7 +67,7 @@ def main() -> None:
     work = OUT / "rank_invariance"
     work.mkdir(exist_ok=True)
     scenes = {"column": ("terzaghi_tpi", COLUMN),
-              "falling_block": (str(falling_far(work)), ["decomposition.rebalance_every=50"])}
+              "falling_block": (str(FALLING_FAR), ["decomposition.rebalance_every=50"])}
     rows = []
     for label, (scene, sets) in scenes.items():
         for r in args.ranks:
