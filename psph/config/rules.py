@@ -17,6 +17,7 @@ from psph.physics.limits import (
     tpi_gain_limit,
     undrained_dt_limit,
 )
+from psph.verify.terzaghi import column_drainage
 
 
 def check_scene(scene):
@@ -127,15 +128,12 @@ def check_integrator(scene) -> None:
 
 
 def check_terzaghi_reference(scene) -> None:
-    """What `verify.terzaghi.from_scene` reads: a load on the top, one drainage time."""
-    key = "verification.reference"
-    if not scene.loads or scene.loads[0].side != "top":
-        raise _Rule(key, "terzaghi", "needs a [[loads]] entry on the top side first")
-    ends = {getattr(scene.boundaries, s).drained_from for s in ("top", "bottom")
-            if getattr(scene.boundaries, s).flow == "drained"}
-    if len(ends) > 1:
-        raise _Rule(key, "terzaghi", "needs the top and the bottom drained from the same "
-                    f"time (boundaries.top/bottom.drained_from: {sorted(ends)})")
+    """What `verify.terzaghi.from_scene` reads (`column_drainage`): a load on the top, one
+    drainage time."""
+    try:
+        column_drainage(scene)
+    except ValueError as e:
+        raise _Rule("verification.reference", "terzaghi", str(e)) from None
 
 
 def check_undrained_load(scene) -> None:

@@ -10,6 +10,7 @@ import numpy as np
 from psph.geometry.lattice import SERIAL, extent, seed
 from psph.geometry.profiles import read_profile
 from psph.geometry.shapes import surface_layer
+from psph.physics.material import lame
 
 _NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
 
@@ -90,8 +91,7 @@ def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
     reference of Terzaghi's problem starts from this state (psph/verify/terzaghi.py)."""
     m = scene.material
     load = scene.loads[0]
-    lam = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu))
-    shear = m.E / (2 * (1 + m.nu))
+    lam, shear = lame(m.E, m.nu)
     modulus = lam + 2 * shear
     p0 = load.pressure / (1.0 + m.porosity * modulus / m.K_l)
     along = -(load.pressure - p0)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from psph.physics.material import constrained_modulus
+
 if TYPE_CHECKING:
     from psph.config.schema import Scene
 
@@ -29,10 +31,8 @@ def undrained_dt_limit(scene: Scene) -> float:
 
 
 def _undrained_dt(scene: Scene, m) -> float:
-    lam = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu))
-    shear = m.E / (2 * (1 + m.nu))
     rho = (1 - m.porosity) * m.rho_s + m.porosity * m.rho_l
-    c_u = math.sqrt((lam + 2 * shear + m.K_l / m.porosity) / rho)
+    c_u = math.sqrt((constrained_modulus(m.E, m.nu) + m.K_l / m.porosity) / rho)
     return scene.time.cfl_solid * scene.h / c_u
 
 

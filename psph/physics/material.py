@@ -22,6 +22,18 @@ from psph.kernels.update import (
 )
 
 
+def lame(E: float, nu: float) -> tuple[float, float]:
+    """Lame's lambda and the shear modulus G of Young's modulus E and Poisson's ratio nu
+    (Eq. 8's isotropic elasticity): the one place psph derives them."""
+    return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+
+def constrained_modulus(E: float, nu: float) -> float:
+    """M = lambda + 2 G, the oedometric (laterally confined) modulus."""
+    lam, shear = lame(E, nu)
+    return lam + 2 * shear
+
+
 @dataclass(frozen=True)
 class ElasticSoil:
     E: float
@@ -35,15 +47,15 @@ class ElasticSoil:
 
     @property
     def shear(self) -> float:
-        return self.E / (2 * (1 + self.nu))
+        return lame(self.E, self.nu)[1]
 
     @property
     def lam(self) -> float:
-        return self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
+        return lame(self.E, self.nu)[0]
 
     @property
     def constrained_modulus(self) -> float:
-        return self.lam + 2 * self.shear
+        return constrained_modulus(self.E, self.nu)
 
     @property
     def sound_speed(self) -> float:

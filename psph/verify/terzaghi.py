@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psph.physics.material import constrained_modulus
+
 
 @dataclass(frozen=True)
 class Terzaghi:
@@ -91,26 +93,30 @@ class Terzaghi:
         return self.settlement(tt) - (self.load * depth - layer) / self.modulus
 
 
+def column_drainage(scene) -> tuple[str, float]:
+    """What the reference reads of a scene's sides: ("top", "bottom" or "both", the time
+    they drain from). ValueError (the rule `config.rules` reports as exit 2) without a load
+    on the top side first, or with the top and the bottom drained from different times."""
+    if not scene.loads or scene.loads[0].side != "top":
+        raise ValueError("needs a [[loads]] entry on the top side first")
+    ends = {name: getattr(scene.boundaries, name).drained_from for name in ("top", "bottom")
+            if getattr(scene.boundaries, name).flow == "drained"}
+    if len(set(ends.values())) > 1:
+        raise ValueError("needs the top and the bottom drained from the same time "
+                         f"(boundaries.top/bottom.drained_from: {sorted(ends.values())})")
+    drainage = "both" if len(ends) == 2 else next(iter(ends), "top")
+    return drainage, min(ends.values(), default=math.inf)
+
+
 def from_scene(scene) -> Terzaghi:
     """The column of a scene: load on the top, height = the blocks' height, drained at the
-    top, the bottom or both (the sides with flow = "drained"; both from the same time)."""
+    top, the bottom or both (`column_drainage`)."""
     m = scene.material
-    E, nu = m.E, m.nu
-    modulus = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
-    if not scene.loads:
-        raise ValueError("terzaghi reference needs a load on the top")
+    modulus = constrained_modulus(m.E, m.nu)
+    drainage, t_drain = column_drainage(scene)
     load = scene.loads[0]
-    top = scene.boundaries.top
     blocks = scene.particles.blocks
     height = max(b.max[1] for b in blocks) - min(b.min[1] for b in blocks)
-    bottom = scene.boundaries.bottom
-    ends = {name: side.drained_from for name, side in (("top", top), ("bottom", bottom))
-            if side.flow == "drained"}
-    if len(ends) == 2 and ends["top"] != ends["bottom"]:
-        raise ValueError("terzaghi reference: top and bottom are drained from different "
-                         f"times ({ends['top']} s, {ends['bottom']} s)")
-    drainage = "both" if len(ends) == 2 else next(iter(ends), "top")
-    t_drain = min(ends.values(), default=math.inf)
     return Terzaghi(height=height, load=load.pressure, modulus=modulus, porosity=m.porosity,
                     bulk_water=m.K_l, conductivity=m.k, gamma_l=m.rho_l * m.g_ref,
                     t_drain=t_drain, drainage=drainage)
