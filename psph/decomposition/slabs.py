@@ -306,7 +306,7 @@ class Slabs:
         it in that exchange."""
         if self.size == 1:
             return
-        cols = [f.reshape(f.shape[0], -1) for f in fields]
+        cols = [f if f.ndim == 2 else f[:, None] for f in fields]  # views, never copies
         widths = [c.shape[1] for c in cols]
         width = sum(widths)
         reqs = []
@@ -318,10 +318,7 @@ class Slabs:
             buf = self._send_buffer(f"refresh{tag}", nh + nm, width)[:nh + nm]
             j = 0
             for c, w in zip(cols, widths, strict=True):
-                if len(cols) == 1:
-                    np.take(c, halo_rows, axis=0, out=buf[:nh])
-                else:
-                    buf[:nh, j:j + w] = c[halo_rows]
+                np.take(c, halo_rows, axis=0, out=buf[:nh, j:j + w])
                 buf[nh:, j:j + w] = c[m0:m0 + nm]
                 j += w
             reqs.append(self.comm.Isend(buf, dest=nbr, tag=tag))
@@ -390,18 +387,17 @@ class Slabs:
 
     # --------------------------------------------------------------- reductions
 
-    def allreduce_sum(self, values: np.ndarray) -> np.ndarray:
-        out = np.empty_like(values)
-        self.comm.Allreduce(values, out, op=MPI.SUM)
-        return out
-
-    def allreduce_sum_into(self, values: np.ndarray, out: np.ndarray) -> None:
-        """out = the element-wise sum over ranks of `values` (preallocated, any dtype;
-        integers add exactly, in any order). Collective."""
+    def allreduce_sum(self, values: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """The element-wise sum over ranks of `values` (any dtype; integers add exactly,
+        in any order), into `out` if given (preallocated, for a sum taken every
+        iteration). Collective."""
+        if out is None:
+            out = np.empty_like(values)
         if self.size == 1:
             out[...] = values
-            return
-        self.comm.Allreduce(values, out, op=MPI.SUM)
+        else:
+            self.comm.Allreduce(values, out, op=MPI.SUM)
+        return out
 
     def exact_sum(self, parts: np.ndarray) -> float:
         """Correctly rounded sum over ranks of each rank's exact expansion `parts`

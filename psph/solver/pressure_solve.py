@@ -156,13 +156,13 @@ class PressureSolve:
         the chunks cannot hold (huge or not finite, on any rank) falls back to."""
         n = self.sim.store.n_owned
         k = len(pairs)
-        if self._rows.shape[0] != k:
+        if self._rows.shape[0] < k:  # the most a call takes (4 at a solve's start)
             self._rows = np.zeros((k, CHUNK_ROW), np.int64)
             self._rows_sum = np.zeros((k, CHUNK_ROW), np.int64)
-        for row, (a, b) in zip(self._rows, pairs, strict=True):
+        rows, total = self._rows[:k], self._rows_sum[:k]
+        for row, (a, b) in zip(rows, pairs, strict=True):
             dot_chunks(a, b, n, row, self._terms)
-        total = self._rows_sum
-        self.sim.slabs.allreduce_sum_into(self._rows, total)
+        self.sim.slabs.allreduce_sum(rows, total)
         if total[:, SPECIAL].any():
             if len(self._bufs) < k:
                 self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
