@@ -23,11 +23,12 @@ def test_job_script_syntax(script):
 @pytest.mark.skipif(shutil.which("mpirun") is None, reason="needs mpirun")
 def test_local_launcher_finishes_a_run_over_several_segments(tmp_path):
     out = tmp_path / "run"
-    # 0.2 s is several 7 s segments on an idle machine; the segment budget leaves room
-    # for a loaded one (the test is about continuity across segments, not speed)
+    # 0.1 s (20,000 TPI steps) is two or more 7 s segments on an idle machine; the segment
+    # budget leaves room for a loaded one (the test is about continuity across segments,
+    # not speed)
     env = dict(os.environ, NP="2", WALL="7", MAX_SEGMENTS="40",
-               EXTRA="--set particles.dx=0.02 --set material.k=8e-4 --set time.end=0.2 "
-                     "--set verification.tv=[] --set output.interval=0.05")
+               EXTRA="--set particles.dx=0.02 --set material.k=8e-4 --set time.end=0.1 "
+                     "--set verification.tv=[] --set output.interval=0.025")
     r = subprocess.run([str(JOBS / "local.sh"), "terzaghi_tpi", str(out)], env=env,
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
@@ -36,5 +37,5 @@ def test_local_launcher_finishes_a_run_over_several_segments(tmp_path):
     assert summary["status"] == "finished" and summary["restarted_from"]
     steps = [s["step"] for s in read_snapshots(out / "particles.h5")]
     times = [s["time"] for s in read_snapshots(out / "particles.h5")]
-    assert steps == sorted(set(steps)) and abs(times[-1] - 0.2) < 5e-6  # within one step
-    assert len(steps) == 5  # t = 0, 0.05, ..., 0.2: none lost or doubled across segments
+    assert steps == sorted(set(steps)) and abs(times[-1] - 0.1) < 5e-6  # within one step
+    assert len(steps) == 5  # t = 0, 0.025, ..., 0.1: none lost or doubled across segments

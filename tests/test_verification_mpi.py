@@ -84,17 +84,20 @@ def test_strip_footing_loading_stage_with_the_projection(tmp_path_factory):
 
 
 @pytest.mark.mpi(min_size=2)
-def test_the_default_run_is_within_one_percent_of_q(tmp_path_factory):
+def test_the_default_run_is_within_one_percent_of_q_to_tv_02(tmp_path_factory):
     """`make run`'s scene as it is (the paper's Section 4.1 column, the projection after
-    the kick at C_CFL^s = 0.4, issue 36) on 2 ranks: within 1 % of q at every T_v to 1,
-    the settlement within 1 %, p bounded throughout (issue 39's sweep row "default")."""
+    the kick at C_CFL^s = 0.4, issue 36) on 2 ranks, its first window: within 1 % of q at
+    T_v = 0.05, 0.1 and 0.2 (the largest error of the run is at 0.05), the settlement
+    within 1 %, p bounded throughout. The whole run to T_v = 1 is
+    `bench/verification/default_run.py` (and `make run`, which prints its errors)."""
     import numpy as np
     from mpi4py import MPI
 
     out = shared_tmp(MPI.COMM_WORLD, tmp_path_factory) / "default"
-    summary = run(load_scene("terzaghi"), out, quiet=True)
+    summary = run(load_scene("terzaghi", ["verification.tv=[0.05, 0.1, 0.2]"]), out,
+                  quiet=True)
     err = summary["errors"]
-    assert set(err["pressure"]) == {"0.05", "0.1", "0.2", "0.5", "1"}
+    assert set(err["pressure"]) == {"0.05", "0.1", "0.2"}
     for tv, e in err["pressure"].items():
         assert e["max_abs_p_error_over_q"] < 0.01, (tv, e)
     assert err["settlement_max_abs_error_over_final"] < 0.01, err
