@@ -116,7 +116,7 @@ def _chunk_dot(a, b, cuts):
 
 
 def test_integer_chunks_summed_over_parts_give_the_exact_dot_bits():
-    """The CG's reduction on several ranks (`PressureSolve._dots`): chunk rows added as
+    """The reduction on several ranks (`solver/exact_dots.ExactDots`): chunk rows added as
     integers, in any split, give exactly `exact_dot` of all terms (the one-rank solve)."""
     rng = np.random.default_rng(7)
     a = np.concatenate([rng.normal(size=600) * 10.0 ** rng.integers(-300, 280, 600),

@@ -16,8 +16,8 @@ import math
 import numpy as np
 
 from psph.config.boundaries import SIDE_PLANES as SIDES
-from psph.kernels.exact_sum import BLOCK, CHUNKS, EXPANSION_CAP, local_parts, sum_expansion_into
 from psph.kernels.images import row_displacement
+from psph.solver.exact_dots import ExactDots
 
 
 class Drainage:
@@ -50,9 +50,8 @@ class Drainage:
             self.pos0[q] = edge - sign * 0.5 * self.dx
             self.planes[q] = (axis, self.pos0[q], sign, 0.0)
         self._row = np.zeros(0)
-        self._parts = np.zeros(EXPANSION_CAP)
-        self._acc, self._terms = np.zeros(CHUNKS, np.int64), np.zeros(BLOCK)
-        self._zero = np.zeros(2)
+        self._ones = np.zeros(0)
+        self._dots = ExactDots()
 
     @property
     def has_planes(self) -> bool:
@@ -70,19 +69,19 @@ class Drainage:
 
     def update_planes(self, t: float, store, slabs) -> np.ndarray:
         """Move each free plane to its first position plus the mean displacement of the
-        outer particle layer (exact sums, the same bits on any rank count; one collective
-        per plane), and mark the planes whose side has drained by t (planes[:, 3]: the
-        Darcy images; the projection's correction images act from the start,
-        `images.image_weights`)."""
+        outer particle layer (exact sums, the same bits on any rank count: the
+        displacements and their count in one integer collective per plane, `exact_dots`),
+        and mark the planes whose side has drained by t (planes[:, 3]: the Darcy images;
+        the projection's correction images act from the start, `images.image_weights`)."""
         for q in range(len(self.planes)):
             axis, pos, sign = int(self.planes[q, 0]), self.planes[q, 1], self.planes[q, 2]
             if self._row.shape[0] < store.n_owned:
                 self._row = np.zeros(store.cap)
+                self._ones = np.ones(store.cap)
             m = row_displacement(store.n_owned, store.x, store.u, axis, pos, sign, self.dx,
                                  self._row)
-            k = sum_expansion_into(self._row, m, self._parts, self._acc, self._terms,
-                                   self._zero)
-            total, count = slabs.exact_sums([local_parts(self._parts, k), np.array([float(m)])])
+            ones = self._ones
+            total, count = self._dots(slabs, m, (self._row, ones), (ones, ones))
             if count > 0:
                 self.planes[q, 1] = self.pos0[q] + total / count
             self.planes[q, 3] = 1.0 if t >= self.plane_from[q] else 0.0

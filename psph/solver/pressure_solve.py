@@ -8,17 +8,7 @@ import math
 
 import numpy as np
 
-from psph.kernels.exact_sum import (
-    BLOCK,
-    CHUNK_ROW,
-    CHUNKS,
-    EXPANSION_CAP,
-    SPECIAL,
-    chunks_value,
-    dot_chunks,
-    dot_expansion,
-    local_parts,
-)
+from psph.kernels.exact_sum import BLOCK, CHUNK_ROW, CHUNKS, EXPANSION_CAP
 from psph.kernels.images import image_weights
 from psph.kernels.laplacian import (
     apply_scaled,
@@ -34,6 +24,7 @@ from psph.kernels.projection import (
     pressure_correction,
     projection_rhs,
 )
+from psph.solver.exact_dots import ExactDots
 from psph.solver.pcg import PCGResult, PCGWork, pcg
 
 
@@ -47,10 +38,8 @@ class PressureSolve:
         self._a = {}
         self._work = PCGWork()
         self._buf = np.zeros(EXPANSION_CAP)
-        self._bufs: list[np.ndarray] = []
         self._ones = np.zeros(0)
-        self._rows = np.zeros((0, CHUNK_ROW), np.int64)
-        self._rows_sum = np.zeros((0, CHUNK_ROW), np.int64)
+        self._exact_dots = ExactDots()
         self._terms = np.zeros(BLOCK)
         self._acc = np.zeros(CHUNKS, np.int64)
         self._row = np.zeros(CHUNK_ROW, np.int64)
@@ -150,26 +139,9 @@ class PressureSolve:
         return self._dots((a, b))[0]
 
     def _dots(self, *pairs: tuple[np.ndarray, np.ndarray]) -> list[float]:
-        """Inner products over the owned rows, in one collective: each rank's terms as
-        integer chunks (`exact_sum.dot_chunks`), summed by one integer Allreduce; the
-        same correctly rounded values as gathering the ranks' expansions, which a term
-        the chunks cannot hold (huge or not finite, on any rank) falls back to."""
-        n = self.sim.store.n_owned
-        k = len(pairs)
-        if self._rows.shape[0] < k:  # the most a call takes (4 at a solve's start)
-            self._rows = np.zeros((k, CHUNK_ROW), np.int64)
-            self._rows_sum = np.zeros((k, CHUNK_ROW), np.int64)
-        rows, total = self._rows[:k], self._rows_sum[:k]
-        for row, (a, b) in zip(rows, pairs, strict=True):
-            dot_chunks(a, b, n, row, self._terms)
-        self.sim.slabs.allreduce_sum(rows, total)
-        if total[:, SPECIAL].any():
-            if len(self._bufs) < k:
-                self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
-            parts = [local_parts(buf, dot_expansion(a, b, n, buf))
-                     for (a, b), buf in zip(pairs, self._bufs, strict=False)]
-            return self.sim.slabs.exact_sums(parts)
-        return [chunks_value(row, self._buf, self._acc) for row in total]
+        """Inner products over the owned rows in one collective (`exact_dots.ExactDots`:
+        integer chunk rows and one integer Allreduce), the same bits on any rank count."""
+        return self._exact_dots(self.sim.slabs, self.sim.store.n_owned, *pairs)
 
     def project(self) -> None:
         """p^(n+1) = p^n + dp from one solve of Eq. (29) (module `psph.kernels.projection`),
