@@ -5,6 +5,8 @@ PYTHON ?= python3
 VENV := .venv
 VPY := $(VENV)/bin/python
 NP ?= 2
+# workers of the serial suite (pytest-xdist; one per core here): make test-serial TEST_WORKERS=1
+TEST_WORKERS ?= 2
 OUT ?= runs/terzaghi
 
 # Open MPI refuses root and more ranks than cores unless told; users should not have to.
@@ -60,8 +62,9 @@ test: layers docs test-serial test-mpi docs-check
 layers: env
 	$(VENV)/bin/lint-imports
 
+# a file's tests stay on one worker (--dist loadfile), so its module fixtures run once
 test-serial: env
-	$(VPY) -m pytest -q
+	$(VPY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 test-mpi: env
 	mpirun -n 2 $(VPY) -m pytest -q --with-mpi -m mpi -p no:cacheprovider tests
