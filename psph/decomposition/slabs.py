@@ -170,6 +170,7 @@ class Slabs:
         self._recv = {}
         self._row_map = np.zeros(0, np.int64)
         self._refresh_plan = {}
+        self._refresh_one_plan = None  # `_refresh_one`'s, built from the plan when used
 
     # --------------------------------------------------------------- setup
 
@@ -286,6 +287,7 @@ class Slabs:
         nh_down = halo_in.get(self.down, 0)
         nh_up = halo_in.get(self.up, 0)
         own_at = first + nh_down + nh_up
+        self._refresh_one_plan = None
         self._refresh_plan = {
             self.down: (self._halo_sent[0], migrants_in.get(self.down, (0, 0)),
                         (first, nh_down), (own_at, nmd)),
@@ -305,6 +307,9 @@ class Slabs:
         halo rows for this rank, then its current rows of the particles this rank handed
         it in that exchange."""
         if self.size == 1:
+            return
+        if len(fields) == 1 and (fields[0].ndim == 1 or fields[0].shape[1] == 1):
+            self._refresh_one(fields[0].reshape(-1))  # a view: contiguous rows
             return
         cols = [f if f.ndim == 2 else f[:, None] for f in fields]  # views, never copies
         widths = [c.shape[1] for c in cols]
@@ -334,6 +339,32 @@ class Slabs:
                 c[o0:o0 + no] = rbuf[nh:, j:j + w]
                 j += w
         MPI.Request.Waitall(reqs)
+
+    def _refresh_one(self, field: np.ndarray) -> None:
+        """`refresh_halo` of one 1-D field: the index lists and buffers of the last
+        exchange's plan kept flat, both messages posted before either is waited for (the
+        CG's search direction is refreshed every iteration: few calls, no temporaries)."""
+        if self._refresh_one_plan is None:
+            plan = []
+            for nbr, stag, rtag in ((self.down, 21, 22), (self.up, 22, 21)):
+                if nbr == MPI.PROC_NULL:
+                    continue
+                halo_rows, (m0, nm), (h0, nh), (o0, no) = self._refresh_plan[nbr]
+                send_idx = np.concatenate((halo_rows, np.arange(m0, m0 + nm)))
+                sbuf = self._send_buffer(f"refresh_one{stag}", len(send_idx), 1)
+                rbuf = self._send_buffer(f"refresh_one_in{rtag}", nh + no, 1)
+                plan.append((nbr, stag, rtag, send_idx, sbuf[:len(send_idx), 0],
+                             rbuf[:nh + no, 0], h0, nh, o0, no))
+            self._refresh_one_plan = plan
+        reqs = []
+        for nbr, stag, rtag, send_idx, sbuf, rbuf, *_ in self._refresh_one_plan:
+            reqs.append(self.comm.Irecv(rbuf, source=nbr, tag=rtag))
+            np.take(field, send_idx, out=sbuf, mode="clip")  # clip: no buffered copy
+            reqs.append(self.comm.Isend(sbuf, dest=nbr, tag=stag))
+        MPI.Request.Waitall(reqs)
+        for _, _, _, _, _, rbuf, h0, nh, o0, no in self._refresh_one_plan:
+            field[h0:h0 + nh] = rbuf[:nh]
+            field[o0:o0 + no] = rbuf[nh:]
 
     # --------------------------------------------------------------- load balance
 

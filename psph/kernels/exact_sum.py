@@ -217,6 +217,27 @@ def dot_chunks(a: np.ndarray, b: np.ndarray, n: int, row: np.ndarray,
 
 
 @nb.njit(cache=True)
+def dot_chunk_rows(a: tuple, b: tuple, n: int, rows: np.ndarray, terms: np.ndarray) -> None:
+    """`dot_chunks` of each pair (a[j], b[j]) into rows[j], in one call (a and b: tuples
+    of equally typed 1-D arrays, as many as rows)."""
+    for j in range(len(a)):
+        dot_chunks(a[j], b[j], n, rows[j], terms)
+
+
+@nb.njit(cache=True)
+def chunk_row_values(rows: np.ndarray, partials: np.ndarray, acc: np.ndarray,
+                     out: np.ndarray) -> bool:
+    """`chunks_value` of each (summed) row into out; False, with out untouched, if a row
+    counts a term the chunks cannot hold (the caller then sums expansions)."""
+    for j in range(rows.shape[0]):
+        if rows[j, SPECIAL] > 0:
+            return False
+    for j in range(rows.shape[0]):
+        out[j] = chunks_value(rows[j], partials, acc)
+    return True
+
+
+@nb.njit(cache=True)
 def _carry(acc: np.ndarray) -> None:
     for i in range(_CHUNKS - 1):
         carry = (acc[i] + (np.int64(1) << 31)) >> 32

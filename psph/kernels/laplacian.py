@@ -157,15 +157,6 @@ def fixed_rhs(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
             rhs[b] += wo * value[a]
 
 
-@nb.njit(cache=True)
-def cg_step(n: int, alpha: float, d: np.ndarray, sd: np.ndarray, x: np.ndarray,
-            r: np.ndarray) -> None:
-    """x += alpha d, r -= alpha S d on the first n rows (no temporaries)."""
-    for i in range(n):
-        x[i] += alpha * d[i]
-        r[i] -= alpha * sd[i]
-
-
 @nb.njit(cache=True, error_model="numpy")  # x / 0 -> inf as numpy, not an exception
 def jacobi(n: int, r: np.ndarray, diag: np.ndarray, u: np.ndarray) -> None:
     """u = r / diag on the first n rows: the Jacobi preconditioner."""
@@ -173,18 +164,27 @@ def jacobi(n: int, r: np.ndarray, diag: np.ndarray, u: np.ndarray) -> None:
         u[i] = r[i] / diag[i]
 
 
-@nb.njit(cache=True)
-def cg_directions(n: int, beta: float, u: np.ndarray, w: np.ndarray, d: np.ndarray,
-                  sd: np.ndarray) -> None:
-    """d = u + beta d and sd = w + beta sd on the first n rows: the search direction and,
-    by linearity, its image S d (w = S u), so a CG iteration applies S once, to u. With
-    beta = 0 (the first direction) d = u and sd = w, whatever d and sd held before."""
-    if beta == 0.0:
-        for i in range(n):
-            d[i] = u[i]
-            sd[i] = w[i]
-        return
+@nb.njit(cache=True, error_model="numpy")  # r / 0 -> inf as in `jacobi`
+def cg_advance(n: int, alpha: float, beta: float, u: np.ndarray, w: np.ndarray,
+               d: np.ndarray, sd: np.ndarray, x: np.ndarray, r: np.ndarray,
+               diag: np.ndarray) -> None:
+    """One CG iteration's vector work on the first n rows, in one pass: the search
+    direction and, by linearity, its image S d (d = u + beta d, sd = w + beta sd with
+    w = S u, so an iteration applies S once, to u; d = u and sd = w when beta = 0,
+    whatever d and sd held), the step (x += alpha d, r -= alpha sd), then the Jacobi
+    preconditioner (u = r / diag). One call instead of three, the same bits (a CG
+    iteration on several ranks is latency-bound, issue 36)."""
+    first = beta == 0.0
     for i in range(n):
-        d[i] = u[i] + beta * d[i]
-        sd[i] = w[i] + beta * sd[i]
-
+        if first:
+            di = u[i]
+            sdi = w[i]
+        else:
+            di = u[i] + beta * d[i]
+            sdi = w[i] + beta * sd[i]
+        d[i] = di
+        sd[i] = sdi
+        x[i] += alpha * di
+        ri = r[i] - alpha * sdi
+        r[i] = ri
+        u[i] = ri / diag[i]

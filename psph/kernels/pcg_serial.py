@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from psph.kernels.exact_sum import chunked_dot
-from psph.kernels.laplacian import apply_scaled, cg_directions, cg_step, jacobi
+from psph.kernels.laplacian import apply_scaled, cg_advance, jacobi
 
 
 @nb.njit(cache=True)
@@ -58,9 +58,7 @@ def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, c_diag: np
         if not (d_sd > 0.0 and math.isfinite(d_sd)):
             return it, (math.nan if not math.isfinite(d_sd) else res), False
         alpha = ru / d_sd
-        cg_directions(n, beta, u, w, d, sd)
-        cg_step(n, alpha, d, sd, x, r)
-        jacobi(n, r, diag, u)
+        cg_advance(n, alpha, beta, u, w, d, sd, x, r, diag)
         _refresh_ghosts(n, n_total, src, sign, u)
         apply_scaled(n, n_pairs, pairs, c_diag, c_off, c_storage, fixed, u, w)
         res = math.sqrt(chunked_dot(r, r, n, row, terms, acc, partials)) / b_norm

@@ -12,9 +12,8 @@ from psph.kernels.exact_sum import (
     CHUNK_ROW,
     CHUNKS,
     EXPANSION_CAP,
-    SPECIAL,
-    chunks_value,
-    dot_chunks,
+    chunk_row_values,
+    dot_chunk_rows,
     dot_expansion,
     local_parts,
 )
@@ -30,22 +29,32 @@ class ExactDots:
         self._acc = np.zeros(CHUNKS, np.int64)
         self._buf = np.zeros(EXPANSION_CAP)
         self._bufs: list[np.ndarray] = []
+        self._values = np.zeros(0)
 
     def __call__(self, slabs, n: int, *pairs: tuple[np.ndarray, np.ndarray]) -> list[float]:
         """sum_k a[k] b[k] over k < n for each pair (a, b), correctly rounded, over all
-        ranks of `slabs` (collective: every rank passes the same number of pairs)."""
+        ranks of `slabs` (collective: every rank passes the same number of pairs). The
+        arrays: 1-D float64, C-contiguous and writeable, all of one numba type (one
+        compiled call takes them as a tuple)."""
         k = len(pairs)
         if self._rows.shape[0] < k:
             self._rows = np.zeros((k, CHUNK_ROW), np.int64)
             self._rows_sum = np.zeros((k, CHUNK_ROW), np.int64)
         rows, total = self._rows[:k], self._rows_sum[:k]
-        for row, (a, b) in zip(rows, pairs, strict=True):
-            dot_chunks(a, b, n, row, self._terms)
+        if self._values.shape[0] < k:
+            self._values = np.zeros(k)
+        values = self._values[:k]
+        # one compiled call for all the rows (a CG iteration on several ranks is latency-
+        # bound: issue 36)
+        a = tuple(p[0] for p in pairs)
+        b = tuple(p[1] for p in pairs)
+        dot_chunk_rows(a, b, n, rows, self._terms)
         slabs.allreduce_sum(rows, total)
-        if total[:, SPECIAL].any():
-            if len(self._bufs) < k:
-                self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
-            parts = [local_parts(buf, dot_expansion(a, b, n, buf))
-                     for (a, b), buf in zip(pairs, self._bufs, strict=False)]
-            return slabs.exact_sums(parts)
-        return [chunks_value(row, self._buf, self._acc) for row in total]
+        if chunk_row_values(total, self._buf, self._acc, values):
+            return values.tolist()
+        if len(self._bufs) < k:
+            self._bufs = [np.zeros(EXPANSION_CAP) for _ in pairs]
+        parts = [local_parts(buf, dot_expansion(x, y, n, buf))
+                 for (x, y), buf in zip(pairs, self._bufs, strict=False)]
+        return slabs.exact_sums(parts)
+

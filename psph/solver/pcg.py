@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from psph.kernels.laplacian import cg_directions, cg_step, jacobi
+from psph.kernels.laplacian import cg_advance, jacobi
 
 
 @dataclass
@@ -83,9 +83,7 @@ def pcg(apply: Callable[[np.ndarray, np.ndarray], None], diag: np.ndarray, rhs: 
         if not (d_sd > 0.0 and math.isfinite(d_sd)):
             return PCGResult(it, math.nan if not math.isfinite(d_sd) else res, False)
         alpha = ru / d_sd
-        cg_directions(n, beta, u, w, d, sd)
-        cg_step(n, alpha, d, sd, x, r)
-        jacobi(n, r, diag, u)
+        cg_advance(n, alpha, beta, u, w, d, sd, x, r, diag)
         refresh(u)
         apply(u, w)
         rr, ru_new, wu = dots((r, r), (r, u), (w, u))
