@@ -530,3 +530,37 @@ def test_polyline_boundaries_one_vs_two_ranks_bitwise(tmp_path_factory):
         "initial.equilibrate=0.01", "time.end=0.01", "output.interval=0.005"]), out / "v")
     _one_vs_two(comm, load_scene(str(out / "incline.toml"), axis + ["time.end=0.1"]),
                 out / "incline")
+
+
+@pytest.mark.mpi(min_size=2)
+def test_halo_refresh_of_one_field_brings_every_owners_value():
+    """`Slabs.refresh_halo` of one column (the CG's search direction, `_refresh_one`) and
+    of several fields at once: every halo row gets its owner's current value, also rows
+    of particles that migrated in the last exchange (the falling block onto its floor)."""
+    from mpi4py import MPI
+
+    from psph.app.run import make_slabs
+    from psph.solver.simulation import Simulation
+
+    comm = MPI.COMM_WORLD
+    scene = load_scene(str(SCENES / "falling.toml"))
+    sim = Simulation(scene, make_slabs(scene, comm))
+    st, slabs = sim.store, sim.slabs
+    migrated = 0
+    while sim.step < 5000 and not migrated:
+        n_before = st.n_owned
+        sim.advance_one()
+        slabs.exchange(st, sim.halo)
+        migrated = comm.allreduce(int(st.n_owned != n_before), op=MPI.SUM)
+    n, nt = st.n_owned, st.n_owned + st.n_halo
+    one = np.full(st.cap, np.nan)
+    two = np.full((st.cap, 2), np.nan)
+    one[:n] = 1.5 * st.key[:n]
+    two[:n, 0] = one[:n]
+    two[:n, 1] = -one[:n]
+    slabs.refresh_halo(one)
+    slabs.refresh_halo(two[:, :1], two[:, 1])
+    assert migrated and comm.allreduce(st.n_halo, op=MPI.MIN) > 0
+    assert np.array_equal(one[n:nt], 1.5 * st.key[n:nt])
+    assert np.array_equal(two[n:nt, 0], one[n:nt])
+    assert np.array_equal(two[n:nt, 1], -one[n:nt])

@@ -309,7 +309,7 @@ class Slabs:
         if self.size == 1:
             return
         if len(fields) == 1 and (fields[0].ndim == 1 or fields[0].shape[1] == 1):
-            self._refresh_one(fields[0].reshape(-1))  # a view: contiguous rows
+            self._refresh_one(fields[0].reshape(-1))  # (cap,) or (cap, 1): a view either way
             return
         cols = [f if f.ndim == 2 else f[:, None] for f in fields]  # views, never copies
         widths = [c.shape[1] for c in cols]
@@ -341,7 +341,7 @@ class Slabs:
         MPI.Request.Waitall(reqs)
 
     def _refresh_one(self, field: np.ndarray) -> None:
-        """`refresh_halo` of one 1-D field: the index lists and buffers of the last
+        """`refresh_halo` of one field of one column: the index lists and buffers of the last
         exchange's plan kept flat, both messages posted before either is waited for (the
         CG's search direction is refreshed every iteration: few calls, no temporaries)."""
         if self._refresh_one_plan is None:
@@ -392,8 +392,11 @@ class Slabs:
 
     def redistribute(self, store: ParticleStore) -> None:
         """Send every owned particle to the rank whose slab holds it (any distance, one
-        all-to-all). Halo and ghost rows are dropped. Collective."""
+        all-to-all). Halo and ghost rows are dropped (and the halo refresh plans with
+        them, until the next `exchange`). Collective."""
         store.n_halo = store.n_ghost = 0
+        self._refresh_plan = {}
+        self._refresh_one_plan = None
         if self.size == 1:
             return
         n = store.n_owned

@@ -37,6 +37,8 @@ class ExactDots:
         arrays: 1-D float64, C-contiguous and writeable, all of one numba type (one
         compiled call takes them as a tuple)."""
         k = len(pairs)
+        if k == 0:
+            return []
         if self._rows.shape[0] < k:
             self._rows = np.zeros((k, CHUNK_ROW), np.int64)
             self._rows_sum = np.zeros((k, CHUNK_ROW), np.int64)
@@ -57,4 +59,3 @@ class ExactDots:
         parts = [local_parts(buf, dot_expansion(x, y, n, buf))
                  for (x, y), buf in zip(pairs, self._bufs, strict=False)]
         return slabs.exact_sums(parts)
-
