@@ -64,10 +64,10 @@ layers: env
 
 # a file's tests stay on one worker (--dist loadfile), so its module fixtures run once
 test-serial: env
-	$(VPY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
+	$(VPY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile --durations=15
 
 test-mpi: env
-	mpirun -n 2 $(VPY) -m pytest -q --with-mpi -m mpi -p no:cacheprovider tests
+	mpirun -n 2 $(VPY) -m pytest -q --with-mpi -m mpi -p no:cacheprovider --durations=15 tests
 
 bench: env
 	mpirun -n 1 $(VPY) bench/performance/throughput.py
