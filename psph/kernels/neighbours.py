@@ -1,38 +1,53 @@
-"""Cell-linked lists with particles sorted by cell, and id order inside a cell.
+"""Cell-linked lists with particles sorted by cell, and id order inside a cell, in 2D and 3D.
 
-Cells are squares of side >= 2h on a grid anchored at a global origin, so a cell's integer
-coordinates are the same on every rank. Cells are numbered row-major (y, then x): the local
-numbering is the restriction of the global one, and with particles in key order inside a
-cell every particle sees its neighbours in the same order on any number of ranks. That is
-what makes 1-rank and N-rank runs bitwise identical.
+Cells are squares (cubes) of side >= 2h on a grid anchored at a global origin, so a
+cell's integer coordinates are the same on every rank. Cells are numbered row-major
+(z, then y, then x): the local numbering is the restriction of the global one, and with
+particles in key order inside a cell every particle sees its neighbours in the same order
+on any number of ranks. That is what makes 1-rank and N-rank runs bitwise identical.
+The dimension is that of the positions (x.shape[1]); a 2D grid is a 3D grid one cell
+thick, so 2D keeps its cell numbers and its stencil order.
 """
 
 import numba as nb
 import numpy as np
 
+# the half stencil: the cells after a cell in the row-major order (z, y, x) among its
+# 26 (3D) or 8 (2D) neighbours, as (ox, oy, oz); the 2D stencil is the first four
+_STENCIL = ((1, 0, 0), (-1, 1, 0), (0, 1, 0), (1, 1, 0),
+            (-1, -1, 1), (0, -1, 1), (1, -1, 1), (-1, 0, 1), (0, 0, 1), (1, 0, 1),
+            (-1, 1, 1), (0, 1, 1), (1, 1, 1))
+
+
+def half_stencil_size(dim: int) -> int:
+    """Entries k of `half_stencil_3d` to visit: the cell itself and its forward neighbours."""
+    return 5 if dim == 2 else 14
+
+
+@nb.njit(cache=True, inline="always")
+def half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start):
+    """Neighbour cell k (0-13; 0-4 in 2D, where cz = 0 and ncz = 1) of the half stencil
+    around cell c = (cx, cy, cz) and the first sorted slot to visit in it, or (-1, 0)
+    outside the grid. k = 0: the rest of cell c after slot sa; then the forward
+    neighbours of `_STENCIL`. Visiting these from every cell meets each pair once, in an
+    order fixed by the global cell numbering."""
+    if k == 0:
+        return c, sa + 1
+    ox, oy, oz = _STENCIL[k - 1]
+    nx = cx + ox
+    ny = cy + oy
+    nz = cz + oz
+    if nx < 0 or nx >= ncx or ny < 0 or ny >= ncy or nz >= ncz:
+        return -1, 0
+    nc = (nz * ncy + ny) * ncx + nx
+    return nc, cell_start[nc]
+
 
 @nb.njit(cache=True, inline="always")
 def half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start):
-    """Neighbour cell k (0-4) of the half stencil around cell c = (cx, cy) and the first
-    sorted slot to visit in it, or (-1, 0) outside the grid. k = 0: the rest of cell c
-    after slot sa; then (+1, 0), (-1, +1), (0, +1), (+1, +1). Visiting these from every
-    cell meets each pair once, in an order fixed by the global cell numbering."""
-    if k == 0:
-        return c, sa + 1
-    if k == 1:
-        ox, oy = 1, 0
-    elif k == 2:
-        ox, oy = -1, 1
-    elif k == 3:
-        ox, oy = 0, 1
-    else:
-        ox, oy = 1, 1
-    nx = cx + ox
-    ny = cy + oy
-    if nx < 0 or nx >= ncx or ny >= ncy:
-        return -1, 0
-    nc = ny * ncx + nx
-    return nc, cell_start[nc]
+    """`half_stencil_3d` of a 2D grid: k = 0: the rest of cell c after slot sa; then
+    (+1, 0), (-1, +1), (0, +1), (+1, +1)."""
+    return half_stencil_3d(k, c, sa, cx, cy, 0, ncx, ncy, 1, cell_start)
 
 
 @nb.njit(cache=True, inline="always")
@@ -51,22 +66,25 @@ def _clamped_cell(c, origin, cell_size, lo, hi):
 def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, fill, order):
     """Counting sort of particles 0..n-1 into cells, then insertion sort by key in a cell.
 
-    x: (cap, 2) positions; key: (cap,) global sort keys; origin: (2,) global grid origin;
-    lo: (2,) int64 lowest local cell coordinates; ncell: (2,) int64 local grid size.
-    Outputs (preallocated): cell_of (cap,), cell_start (>= ncx*ncy + 1,), fill (>= ncx*ncy,)
-    scratch, order (cap,).
+    x: (cap, dim) positions; key: (cap,) global sort keys; origin: (dim,) global grid
+    origin; lo: (dim,) int64 lowest local cell coordinates; ncell: (dim,) int64 local grid
+    size. Outputs (preallocated): cell_of (cap,), cell_start (>= prod(ncell) + 1,), fill
+    (>= prod(ncell),) scratch, order (cap,).
     Particles outside the local grid (only possible after one left the domain, which the
     update reports as a failure) are clamped into its edge cells.
     """
-    ncx = ncell[0]
-    ncy = ncell[1]
-    nc = ncx * ncy
+    dim = x.shape[1]
+    nc = 1
+    for d in range(dim):
+        nc *= ncell[d]
     for c in range(nc + 1):
         cell_start[c] = 0
     for i in range(n):
-        cx = _clamped_cell(x[i, 0], origin[0], cell_size, lo[0], lo[0] + ncx - 1) - lo[0]
-        cy = _clamped_cell(x[i, 1], origin[1], cell_size, lo[1], lo[1] + ncy - 1) - lo[1]
-        c = cy * ncx + cx
+        c = 0
+        for d in range(dim - 1, -1, -1):
+            cd = _clamped_cell(x[i, d], origin[d], cell_size, lo[d],
+                               lo[d] + ncell[d] - 1) - lo[d]
+            c = c * ncell[d] + cd
         cell_of[i] = c
         cell_start[c + 1] += 1
     for c in range(nc):
@@ -94,31 +112,71 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
 @nb.njit(cache=True)
 def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
     """Lowest cell coordinates `lo` and grid size `ncell` covering particles 0..n-1, with a
-    one-cell margin, cell coordinates limited to [0, cmax] (the domain's grid)."""
+    one-cell margin, cell coordinates limited to [0, cmax] (the domain's grid); each
+    (dim,), dim = x.shape[1]."""
+    dim = x.shape[1]
     if n == 0:
-        lo[0] = 0
-        lo[1] = 0
-        ncell[0] = 1
-        ncell[1] = 1
+        for d in range(dim):
+            lo[d] = 0
+            ncell[d] = 1
         return
-    c0min = c1min = 1 << 62
-    c0max = c1max = -(1 << 62)
-    for i in range(n):
-        c0 = _clamped_cell(x[i, 0], origin[0], cell_size, 1, cmax[0] - 1)
-        c1 = _clamped_cell(x[i, 1], origin[1], cell_size, 1, cmax[1] - 1)
-        c0min = min(c0min, c0)
-        c0max = max(c0max, c0)
-        c1min = min(c1min, c1)
-        c1max = max(c1max, c1)
-    lo[0] = c0min - 1
-    lo[1] = c1min - 1
-    ncell[0] = c0max - c0min + 3
-    ncell[1] = c1max - c1min + 3
+    for d in range(dim):
+        cmin = 1 << 62
+        cmx = -(1 << 62)
+        for i in range(n):
+            cd = _clamped_cell(x[i, d], origin[d], cell_size, 1, cmax[d] - 1)
+            cmin = min(cmin, cd)
+            cmx = max(cmx, cd)
+        lo[d] = cmin - 1
+        ncell[d] = cmx - cmin + 3
+
+
+@nb.njit(cache=True)
+def neighbour_pairs(n, x, h, cell_start, order, ncell, pairs):
+    """The pairs (a, b) of particles 0..n-1 closer than 2h, each once, in the half-stencil
+    order of the pair sweeps (2D or 3D, by x.shape[1]) into pairs (m, 2) int64; returns
+    their number, or -1 if m rows are not enough."""
+    dim = x.shape[1]
+    ncx = ncell[0]
+    ncy = ncell[1]
+    ncz = ncell[2] if dim == 3 else 1
+    n_stencil = 5 if dim == 2 else 14
+    reach2 = 4.0 * h * h
+    m = 0
+    for cz in range(ncz):
+        for cy in range(ncy):
+            for cx in range(ncx):
+                c = (cz * ncy + cy) * ncx + cx
+                for sa in range(cell_start[c], cell_start[c + 1]):
+                    a = order[sa]
+                    if a >= n:
+                        continue
+                    for k in range(n_stencil):
+                        nc, sb = half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz,
+                                                 cell_start)
+                        if nc < 0:
+                            continue
+                        for s in range(sb, cell_start[nc + 1]):
+                            b = order[s]
+                            if b >= n:
+                                continue
+                            r2 = 0.0
+                            for d in range(dim):
+                                e = x[b, d] - x[a, d]
+                                r2 += e * e
+                            if r2 >= reach2:
+                                continue
+                            if m >= pairs.shape[0]:
+                                return -1
+                            pairs[m, 0] = a
+                            pairs[m, 1] = b
+                            m += 1
+    return m
 
 
 def cell_lists(x: np.ndarray, h: float,
                key: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(cell_start, order, ncell) of a whole particle set in one go, cells of side 2h
+    """(cell_start, order, ncell) of a whole particle set (2D or 3D) in one go, cells of side 2h
     (the pair sweeps' layout); for verification drivers and tests, not the time loop,
     which keeps its arrays. key: the sort key within a cell (default: the index)."""
     return cell_lists_indexed(x, h, key)[1:]
@@ -127,13 +185,13 @@ def cell_lists(x: np.ndarray, h: float,
 def cell_lists_indexed(x: np.ndarray, h: float, key: np.ndarray | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(cell_of, cell_start, order, ncell): `cell_lists` with each particle's cell."""
-    n = len(x)
+    n, dim = x.shape
     key = np.arange(n, dtype=float) if key is None else key
     cs = 2 * h
     origin = x.min(axis=0) - 4 * cs
-    lo = np.zeros(2, np.int64)
-    ncell = np.zeros(2, np.int64)
-    grid_bounds(x, n, origin, cs, np.array([1 << 40, 1 << 40], np.int64), lo, ncell)
+    lo = np.zeros(dim, np.int64)
+    ncell = np.zeros(dim, np.int64)
+    grid_bounds(x, n, origin, cs, np.full(dim, 1 << 40, np.int64), lo, ncell)
     nc = int(ncell.prod())
     cell_of = np.zeros(n, np.int64)
     cell_start = np.zeros(nc + 1, np.int64)

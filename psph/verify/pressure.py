@@ -20,10 +20,10 @@ import math
 import numpy as np
 from mpi4py import MPI
 
+from psph.kernels.spline import ALPHA_2D
 from psph.physics.initial import table_elevation
 from psph.verify.distributed import extreme, percentiles, with_halo
 
-ALPHA_2D = 15.0 / (7.0 * math.pi)  # normalisation of Eq. (21) in 2D, times 1/h^2
 DEBRIS_DX = 5.0  # a particle that moved more than this many dx is "debris"
 PERCENTILES = (1, 5, 50, 95, 99)
 SURFACE_BIN = 0.25  # bin width of the ground-surface search, in dx
