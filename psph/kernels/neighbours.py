@@ -13,12 +13,11 @@ import numba as nb
 import numpy as np
 
 # the half stencil: the cells after a cell in the row-major order (z, y, x) among its
-# 26 (3D) or 8 (2D) neighbours, as (ox, oy, oz); the 2D stencil is the first four
-_STENCIL = ((1, 0, 0), (-1, 1, 0), (0, 1, 0), (1, 1, 0),
-            (-1, -1, 1), (0, -1, 1), (1, -1, 1), (-1, 0, 1), (0, 0, 1), (1, 0, 1),
-            (-1, 1, 1), (0, 1, 1), (1, 1, 1))
+# 26 (3D) or 8 (2D) neighbours, as (ox, oy, oz): k = 1: (+1, 0, 0); k = 2-4: (-1..+1, +1, 0);
+# k = 5-13: (-1..+1, -1..+1, +1), x fastest. The 2D stencil is k = 0-4.
 
 
+@nb.njit(cache=True, inline="always")
 def half_stencil_size(dim: int) -> int:
     """Entries k of `half_stencil_3d` to visit: the cell itself and its forward neighbours."""
     return 5 if dim == 2 else 14
@@ -29,11 +28,16 @@ def half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start):
     """Neighbour cell k (0-13; 0-4 in 2D, where cz = 0 and ncz = 1) of the half stencil
     around cell c = (cx, cy, cz) and the first sorted slot to visit in it, or (-1, 0)
     outside the grid. k = 0: the rest of cell c after slot sa; then the forward
-    neighbours of `_STENCIL`. Visiting these from every cell meets each pair once, in an
-    order fixed by the global cell numbering."""
+    neighbours (the comment above). Visiting these from every cell meets each pair once,
+    in an order fixed by the global cell numbering."""
     if k == 0:
         return c, sa + 1
-    ox, oy, oz = _STENCIL[k - 1]
+    if k == 1:
+        ox, oy, oz = 1, 0, 0
+    elif k < 5:
+        ox, oy, oz = k - 3, 1, 0
+    else:
+        ox, oy, oz = (k - 5) % 3 - 1, (k - 5) // 3 - 1, 1
     nx = cx + ox
     ny = cy + oy
     nz = cz + oz
@@ -140,7 +144,7 @@ def neighbour_pairs(n, x, h, cell_start, order, ncell, pairs):
     ncx = ncell[0]
     ncy = ncell[1]
     ncz = ncell[2] if dim == 3 else 1
-    n_stencil = 5 if dim == 2 else 14
+    n_stencil = half_stencil_size(dim)
     reach2 = 4.0 * h * h
     m = 0
     for cz in range(ncz):
