@@ -1,0 +1,115 @@
+"""Cryer's sphere (Cryer 1963; Verruijt, Theory and Problems of Poroelasticity, Sect. 3.3):
+the reference of the 3D scene `cryer` (issue 37).
+
+A saturated sphere of radius a, its surface drained (p = 0), takes a sudden uniform
+confining pressure q at t = 0. With incompressible grains and the pore fluid's storage
+n / K_l (psph's mixture, Eq. 5 and 9), the undrained pressure is
+
+    p0 = q / (1 + n K / K_l),
+
+K = E / (3 (1 - 2 nu)) the drained bulk modulus, and the pressure at the centre is
+
+    p(0, t) / p0 = sum_j eta (sin xi_j - xi_j) / ((eta - 1) sin xi_j + eta xi_j cos xi_j / 2)
+                   exp(-xi_j^2 c t / a^2),
+
+over the positive roots of (1 - eta xi^2 / 2) tan xi = xi, with
+
+    eta = M / (2 G) (1 + n K / K_l),   c = k / (gamma_l (n / K_l + 1 / M)),
+
+G the shear and M = K + 4 G / 3 the constrained modulus; c is Terzaghi's c_v of the same
+soil (`terzaghi.py`). The centre pressure first rises above p0 (the Mandel-Cryer effect:
+the drained rim contracts and squeezes the core) before it decays. The series sums to 1 at
+t = 0; `tests/test_cryer.py` checks it against a radial finite-volume solution of the same
+equations.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from psph.physics.material import constrained_modulus
+
+
+@dataclass(frozen=True)
+class Cryer:
+    radius: float  # a (m)
+    load: float  # q (Pa), the confining pressure
+    young: float  # E (Pa)
+    poisson: float  # nu
+    porosity: float  # n
+    bulk_water: float  # K_l (Pa)
+    conductivity: float  # k (m/s)
+    gamma_l: float  # rho_l g (N/m^3)
+
+    @property
+    def bulk(self) -> float:
+        """K, the drained bulk modulus (Pa)."""
+        return self.young / (3.0 * (1.0 - 2.0 * self.poisson))
+
+    @property
+    def shear(self) -> float:
+        """G (Pa)."""
+        return self.young / (2.0 * (1.0 + self.poisson))
+
+    @property
+    def modulus(self) -> float:
+        """M = K + 4 G / 3, the constrained modulus (Pa)."""
+        return constrained_modulus(self.young, self.poisson)
+
+    @property
+    def p0(self) -> float:
+        """The undrained pressure right after loading (Pa)."""
+        return self.load / (1.0 + self.porosity * self.bulk / self.bulk_water)
+
+    @property
+    def eta(self) -> float:
+        return self.modulus / (2.0 * self.shear) * (
+            1.0 + self.porosity * self.bulk / self.bulk_water)
+
+    @property
+    def cv(self) -> float:
+        """The consolidation coefficient (m^2/s)."""
+        return self.conductivity / (
+            self.gamma_l * (self.porosity / self.bulk_water + 1.0 / self.modulus))
+
+    def roots(self, count: int = 200) -> np.ndarray:
+        """The first `count` positive roots of (1 - eta xi^2 / 2) sin xi = xi cos xi
+        (the tangent form without its poles), by bisection of each sign change."""
+        eta = self.eta
+
+        def g(xi):
+            return (1.0 - 0.5 * eta * xi * xi) * np.sin(xi) - xi * np.cos(xi)
+
+        # one root in each interval ((k - 1/2) pi, (k + 1/2) pi] for k >= 1 (tan's branches);
+        # a fine grid within each finds it whatever eta
+        grid = np.linspace(1e-6, (count + 1.5) * math.pi, 64 * (count + 2))
+        values = g(grid)
+        change = np.nonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)[0][:count]
+        lo, hi = grid[change], grid[change + 1]
+        glo = g(lo)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            gm = g(mid)
+            left = np.sign(gm) == np.sign(glo)
+            lo = np.where(left, mid, lo)
+            glo = np.where(left, gm, glo)
+            hi = np.where(left, hi, mid)
+        return 0.5 * (lo + hi)
+
+    def coefficients(self, count: int = 200) -> tuple[np.ndarray, np.ndarray]:
+        """(xi_j, A_j): p(0, t) / p0 = sum_j A_j exp(-xi_j^2 c t / a^2)."""
+        xi = self.roots(count)
+        eta = self.eta
+        a = eta * (np.sin(xi) - xi) / ((eta - 1.0) * np.sin(xi) + 0.5 * eta * xi * np.cos(xi))
+        return xi, a
+
+    def time_factor(self, t):
+        """c t / a^2."""
+        return np.asarray(t, float) * self.cv / self.radius ** 2
+
+    def centre_pressure(self, t, count: int = 200) -> np.ndarray:
+        """p at the centre (Pa) at times t > 0 (s) after the load."""
+        xi, a = self.coefficients(count)
+        tau = np.atleast_1d(self.time_factor(t))
+        return self.p0 * (np.exp(-np.outer(tau, xi * xi)) @ a).reshape(np.shape(t))
