@@ -140,3 +140,51 @@ def test_laplacian_of_a_quadratic_eq23_in_3d():
         else:
             assert np.mean(lap[inner]) == pytest.approx(expected, rel=0.01)
             assert np.max(np.abs(lap[inner] - expected)) < 0.1 * expected
+
+
+@pytest.mark.parametrize("n_ghost", [0, 40])
+def test_velocity_sweep_in_3d(n_ghost):
+    """`velocity_gradient_sums` in 3D (`make_velocity_gradient_sums(3)`, the 2D sweep's
+    source): GV, GS (pairs with a ghost, whose free-slip velocity differs) and GN against
+    numpy sums over the same pairs, and the corrected GV of a linear field exact."""
+    from psph.kernels.interactions import velocity_gradient_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    lay = sum_layout(3)
+    dx, h = 0.1, 0.13
+    x = lattice_3d(8, dx, 0.2)
+    n = len(x)
+    n_real = n - n_ghost
+    rng = np.random.default_rng(2)
+    vol = rng.uniform(0.9, 1.1, n) * dx ** 3
+    poro = rng.uniform(0.3, 0.5, n)
+    grad_v = np.array([[0.3, -1.2, 0.4], [2.0, 0.5, -0.7], [0.1, 0.9, -0.2]])
+    v = x @ grad_v.T + [1.0, -2.0, 0.5]
+    v_slip = v.copy()
+    v_slip[n_real:, 2] *= -1.0  # ghosts: a free-slip mirror that differs from v
+    pairs = pairs_of(x, h)
+    g = gradients(x, h, pairs)
+    sums = np.full((n, lay.NSUMS), 7.0)  # GV, GS, GN are overwritten, the rest kept
+    velocity_gradient_sums_3d(n_real, n_real, len(pairs), pairs, g, v, v_slip, poro, vol,
+                              True, sums)
+    a, b = pairs[:, 0], pairs[:, 1]
+    ghost = (a >= n_real) | (b >= n_real)
+    dv = v[b] - v[a]
+    ds = np.where(ghost[:, None], v_slip[b] - v_slip[a], dv)
+    expected = {"GV": (dv, vol), "GS": ((ds - dv) * ghost[:, None], vol),
+                "GN": (ds, vol * (1.0 - poro))}
+    for name, (d, w) in expected.items():
+        ref = np.zeros((n, 3, 3))
+        np.add.at(ref, a, w[b, None, None] * d[:, :, None] * g[:, None, :])
+        np.add.at(ref, b, w[a, None, None] * d[:, :, None] * g[:, None, :])
+        c = getattr(lay, name)
+        got = sums[:n_real, c:c + 9].reshape(-1, 3, 3)
+        assert np.allclose(got, ref[:n_real], rtol=1e-12, atol=1e-12), name
+    assert sums[:n_real, lay.GS:lay.GS + 9].any() == (n_ghost > 0)
+    assert np.all(sums[:, lay.M:lay.M + 9] == 7.0) and np.all(sums[n_real:] == 7.0)
+    xab = x[b] - x[a]
+    moment = np.zeros((n, 3, 3))
+    np.add.at(moment, a, vol[b, None, None] * xab[:, :, None] * g[:, None, :])
+    np.add.at(moment, b, vol[a, None, None] * xab[:, :, None] * g[:, None, :])
+    gv = sums[:n_real, lay.GV:lay.GV + 9].reshape(-1, 3, 3)
+    assert np.allclose(gv @ np.linalg.inv(moment[:n_real]), grad_v, atol=1e-9)

@@ -33,6 +33,7 @@ import math
 
 import numba as nb
 
+from psph.kernels.dims import pick
 from psph.kernels.neighbours import half_stencil
 from psph.kernels.spline import dw_cubic, w_cubic
 from psph.kernels.sum_columns import (
@@ -66,6 +67,7 @@ from psph.kernels.sum_columns import (
     SUM_A,
     SUM_AP,
     SUM_APSI,
+    sum_layout,
 )
 
 
@@ -247,74 +249,76 @@ def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
     return n_pairs if n_pairs <= cap_pairs else -1
 
 
-@nb.njit(cache=True, error_model="numpy")
-def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, poro, vol, coupled,
-                           sums):
-    """Recompute only the velocity sums GV, GS and, if `coupled`,
-    GN of owned particles from the current `v` and `v_slip` (rows n_real..:
-    wall ghosts), over the pairs `pair_sums` recorded (same positions, same order, so
-    the sums are as partition-independent as pair_sums').
+def make_velocity_gradient_sums(dim: int):
+    """`velocity_gradient_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`), over
+    `sums` of `sum_layout(dim)`; 2D: the same bits as the hand-written 2D sweep."""
+    lay = sum_layout(dim)
+    gv, gs, gn, nt = lay.GV, lay.GS, lay.GN, dim * dim
 
-    Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
-    v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure (Eq. 25)
-    rates take the new velocity, the staggered order of the leapfrog Eq. (27). And by the
-    pressure projection after its velocity correction (`Simulation._project`).
-    """
-    for i in range(n_owned):
-        for c in range(GV_XX, GV_YY + 1):
-            sums[i, c] = 0.0
-        for c in range(GS_XX, GS_YY + 1):
-            sums[i, c] = 0.0
-        if coupled:
-            for c in range(GN_XX, GN_YY + 1):
-                sums[i, c] = 0.0
-    for k in range(n_pairs):
-        a = pairs[k, 0]
-        b = pairs[k, 1]
-        g0 = pair_g[k, 0]
-        g1 = pair_g[k, 1]
-        dv0 = v[b, 0] - v[a, 0]
-        dv1 = v[b, 1] - v[a, 1]
-        ghost_pair = a >= n_real or b >= n_real
-        ds0 = dv0
-        ds1 = dv1
-        if ghost_pair:
-            ds0 = v_slip[b, 0] - v_slip[a, 0]
-            ds1 = v_slip[b, 1] - v_slip[a, 1]
-        if a < n_owned:
-            vb = vol[b]
-            sums[a, GV_XX] += vb * dv0 * g0
-            sums[a, GV_XY] += vb * dv0 * g1
-            sums[a, GV_YX] += vb * dv1 * g0
-            sums[a, GV_YY] += vb * dv1 * g1
+    @nb.njit(cache=True, error_model="numpy")
+    def velocity_gradient_sums(n_owned, n_real, n_pairs, pairs, pair_g, v, v_slip, poro, vol,
+                               coupled, sums):
+        """Recompute only the velocity sums GV, GS and, if `coupled`,
+        GN of owned particles from the current `v` and `v_slip` (rows n_real..:
+        wall ghosts), over the pairs `pair_sums` recorded (same positions, same order, so
+        the sums are as partition-independent as pair_sums').
+
+        Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
+        v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure
+        (Eq. 25) rates take the new velocity, the staggered order of the leapfrog
+        Eq. (27). And by the pressure projection after its velocity correction
+        (`Simulation._project`).
+        """
+        for i in range(n_owned):
+            for c in range(nt):
+                sums[i, gv + c] = 0.0
+                sums[i, gs + c] = 0.0
+                if coupled:
+                    sums[i, gn + c] = 0.0
+        for k in range(n_pairs):
+            a = pairs[k, 0]
+            b = pairs[k, 1]
+            g0 = pair_g[k, 0]
+            g1 = pair_g[k, 1]
+            g2 = pair_g[k, 2] if dim == 3 else 0.0
+            dv0 = v[b, 0] - v[a, 0]
+            dv1 = v[b, 1] - v[a, 1]
+            dv2 = v[b, 2] - v[a, 2] if dim == 3 else 0.0
+            ghost_pair = a >= n_real or b >= n_real
+            ds0 = dv0
+            ds1 = dv1
+            ds2 = dv2
             if ghost_pair:
-                sums[a, GS_XX] += vb * (ds0 - dv0) * g0
-                sums[a, GS_XY] += vb * (ds0 - dv0) * g1
-                sums[a, GS_YX] += vb * (ds1 - dv1) * g0
-                sums[a, GS_YY] += vb * (ds1 - dv1) * g1
-            if coupled:
-                wn = vb * (1.0 - poro[b])
-                sums[a, GN_XX] += wn * ds0 * g0
-                sums[a, GN_XY] += wn * ds0 * g1
-                sums[a, GN_YX] += wn * ds1 * g0
-                sums[a, GN_YY] += wn * ds1 * g1
-        if b < n_owned:
-            va = vol[a]
-            sums[b, GV_XX] += va * dv0 * g0
-            sums[b, GV_XY] += va * dv0 * g1
-            sums[b, GV_YX] += va * dv1 * g0
-            sums[b, GV_YY] += va * dv1 * g1
-            if ghost_pair:
-                sums[b, GS_XX] += va * (ds0 - dv0) * g0
-                sums[b, GS_XY] += va * (ds0 - dv0) * g1
-                sums[b, GS_YX] += va * (ds1 - dv1) * g0
-                sums[b, GS_YY] += va * (ds1 - dv1) * g1
-            if coupled:
-                wn = va * (1.0 - poro[a])
-                sums[b, GN_XX] += wn * ds0 * g0
-                sums[b, GN_XY] += wn * ds0 * g1
-                sums[b, GN_YX] += wn * ds1 * g0
-                sums[b, GN_YY] += wn * ds1 * g1
+                ds0 = v_slip[b, 0] - v_slip[a, 0]
+                ds1 = v_slip[b, 1] - v_slip[a, 1]
+                ds2 = v_slip[b, 2] - v_slip[a, 2] if dim == 3 else 0.0
+            for side in range(2):  # a's sums with V_b, then b's with V_a
+                i = a if side == 0 else b
+                j = b if side == 0 else a
+                if i >= n_owned:
+                    continue
+                vj = vol[j]
+                for m in range(dim):
+                    dvm = pick(m, dv0, dv1, dv2)
+                    for q in range(dim):
+                        sums[i, gv + m * dim + q] += vj * dvm * pick(q, g0, g1, g2)
+                if ghost_pair:
+                    for m in range(dim):
+                        ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
+                        for q in range(dim):
+                            sums[i, gs + m * dim + q] += vj * ddm * pick(q, g0, g1, g2)
+                if coupled:
+                    wn = vj * (1.0 - poro[j])
+                    for m in range(dim):
+                        dsm = pick(m, ds0, ds1, ds2)
+                        for q in range(dim):
+                            sums[i, gn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
+
+    return velocity_gradient_sums
+
+
+velocity_gradient_sums = make_velocity_gradient_sums(2)
+velocity_gradient_sums_3d = make_velocity_gradient_sums(3)
 
 
 @nb.njit(cache=True)

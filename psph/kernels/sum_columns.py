@@ -18,8 +18,11 @@ V_j kbar_ij 2F_ij (Eq. 33) and components m, n, a in (x, y):
   GS_an    sum V_j (vs_j - vs_i - v_j + v_i)^a dW^n   stretching correction at walls
 
 vs is the free-slip mirror velocity on wall ghosts (`interactions.py`, "Walls"). The
-two-index groups are row-major: XX, XY, YX, YY.
+two-index groups are row-major: XX, XY, YX, YY. The constants below are the 2D layout;
+`sum_layout(dim)` gives the same groups in 2D or 3D (issue 37).
 """
+
+from typing import NamedTuple
 
 M_XX, M_XY, M_YX, M_YY = 0, 1, 2, 3
 GV_XX, GV_XY, GV_YX, GV_YY = 4, 5, 6, 7
@@ -44,3 +47,35 @@ GN = slice(GN_XX, GN_YY + 1)
 GS = slice(GS_XX, GS_YY + 1)
 GP = slice(GP_X, GP_Y + 1)
 Q = slice(Q_X, Q_Y + 1)
+
+
+class SumLayout(NamedTuple):
+    """First column of each group of `sums` in `dim` dimensions (tensor groups dim x dim,
+    row-major; vector groups dim): kernels written once for 2D and 3D (`dims.py`) take
+    their columns from `sum_layout(dim)`, a constant of each compiled specialisation."""
+    dim: int
+    M: int
+    GV: int
+    GP: int
+    GN: int
+    Q: int
+    SUM_A: int
+    SUM_AP: int
+    SUM_APSI: int
+    GA: int
+    DVDT: int
+    GS: int
+    NSUMS: int
+
+
+def sum_layout(dim: int) -> SumLayout:
+    """The layout of `sums` in 2D (the module's constants above) or 3D: the same groups in
+    the same order, each of its size in `dim` dimensions."""
+    t, v = dim * dim, dim
+    sizes = (("M", t), ("GV", t), ("GP", v), ("GN", t), ("Q", v), ("SUM_A", 1),
+             ("SUM_AP", 1), ("SUM_APSI", 1), ("GA", t), ("DVDT", v), ("GS", t))
+    start, first = 0, {}
+    for name, size in sizes:
+        first[name] = start
+        start += size
+    return SumLayout(dim=dim, NSUMS=start, **first)
