@@ -48,7 +48,7 @@ class PairParams(NamedTuple):
     C_ij in Eq. (26); rho_l times the body force (N/m^3); coupled: the pressure sums;
     acc_term: the div(k dv/dt) sums; as_n, w_dx: exponent and W(dx) of the artificial
     stress (as_n = 0: off); p_weight: share of p in the pair stress; record: write the
-    pairs."""
+    pairs; rho_l_b2: rho_l b_z in 3D."""
     h: float
     tpi_alpha: float = 0.0
     av_alpha: float = 0.0
@@ -62,6 +62,7 @@ class PairParams(NamedTuple):
     w_dx: float = 1.0
     p_weight: float = 1.0
     record: bool = False
+    rho_l_b2: float = 0.0  # the body force's third component (3D)
 
     def typed(self) -> "PairParams":
         """The same values as the compiled types (float, bool)."""

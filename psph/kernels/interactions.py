@@ -34,84 +34,70 @@ import math
 import numba as nb
 
 from psph.kernels.dims import pick
-from psph.kernels.neighbours import half_stencil
-from psph.kernels.spline import dw_cubic, w_cubic
-from psph.kernels.sum_columns import (
-    DVDT_X,
-    DVDT_Y,
-    GA_XX,
-    GA_XY,
-    GA_YX,
-    GA_YY,
-    GN_XX,
-    GN_XY,
-    GN_YX,
-    GN_YY,
-    GP_X,
-    GP_Y,
-    GS_XX,
-    GS_XY,
-    GS_YX,
-    GS_YY,
-    GV_XX,
-    GV_XY,
-    GV_YX,
-    GV_YY,
-    M_XX,
-    M_XY,
-    M_YX,
-    M_YY,
-    NSUMS,
-    Q_X,
-    Q_Y,
-    SUM_A,
-    SUM_AP,
-    SUM_APSI,
-    sum_layout,
-)
+from psph.kernels.neighbours import half_stencil_3d
+from psph.kernels.spline import dw_cubic_dim, w_cubic_dim
+from psph.kernels.sum_columns import sum_layout
 
 
-@nb.njit(cache=True, error_model="numpy")
-def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
-    """Accumulate the sums of `sum_columns.py` for particles 0..n_owned-1.
+def make_pair_sums(dim: int):
+    """`pair_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`): stress in Voigt
+    order xx, yy, zz, xy (2D) and yz, zx (3D); 2D: the same bits as the hand-written 2D
+    sweep (tests/test_kernels.py, the runs' bitwise tests)."""
+    lay = sum_layout(dim)
+    cm, cgv, cgp, cgn, cq = lay.M, lay.GV, lay.GP, lay.GN, lay.Q
+    ca, cap_, capsi, cga, cdv, cgs = (lay.SUM_A, lay.SUM_AP, lay.SUM_APSI, lay.GA,
+                                      lay.DVDT, lay.GS)
+    nsums = lay.NSUMS
+    n_stencil = 5 if dim == 2 else 14
+    as_xy = 2 if dim == 2 else 3  # the artificial stress's xy column
 
-    f: `bundles.PairFields` of rows 0..n_total-1; rows n_real.. are wall ghosts, whose
-    `v_slip` (free-slip mirror) enters GN and GS (see the module docstring).
-    cells: `bundles.Cells`. par: `bundles.PairParams`: coupled computes the
-    pressure-related sums (GP, GN, Q, SUM_A, SUM_AP, SUM_APSI); acc_term the div(k dv/dt)
-    sums GA; rho_l_b = rho_l * body force (N/m^3); the artificial stress f.astress (xx,
-    yy, xy) enters the pair stress with weight (W(r) / w_dx)^as_n (C_ij of Eq. 26), off
-    at as_n = 0; p_weight = 1 puts the pore pressure in the pair's total stress (Eq. 26
-    as written), 0 leaves it out for `update.pore_pressure_force` to add it as a
-    corrected gradient; record writes the visited pairs (a, b) and grad_a W_ab to
-    rec (`bundles.PairRecord`) in visiting order, for `velocity_gradient_sums`.
-    Returns the number of pairs recorded, or -1 if rec.pairs is too short (the sums are
-    complete either way).
-    """
-    x, v, v_slip, stress, p, p_prev = f.x, f.v, f.v_slip, f.stress, f.p, f.p_prev
-    poro, vol, rho, perm, acc, astress = f.poro, f.vol, f.rho, f.perm, f.acc, f.astress
-    cell_start, order, ncell = cells.cell_start, cells.order, cells.ncell
-    h, tpi_alpha, av_alpha, av_beta = par.h, par.tpi_alpha, par.av_alpha, par.av_beta
-    c_sound, rho_l_b0, rho_l_b1 = par.c_sound, par.rho_l_b0, par.rho_l_b1
-    coupled, acc_term, as_n, w_dx = par.coupled, par.acc_term, par.as_n, par.w_dx
-    p_weight, record = par.p_weight, par.record
-    pairs, pair_g = rec.pairs, rec.pair_g
-    n_pairs = 0
-    cap_pairs = pairs.shape[0]
-    for i in range(n_owned):
-        for c in range(NSUMS):
-            sums[i, c] = 0.0
-    ncx = ncell[0]
-    ncy = ncell[1]
-    support2 = 4.0 * h * h
-    eps2 = 0.01 * h * h
-    for cy in range(ncy):
-        for cx in range(ncx):
-            c = cy * ncx + cx
+    @nb.njit(cache=True, error_model="numpy")
+    def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
+        """Accumulate the sums of `sum_columns.py` (`sum_layout(dim)`) for particles
+            0..n_owned-1.
+
+        f: `bundles.PairFields` of rows 0..n_total-1; rows n_real.. are wall ghosts, whose
+        `v_slip` (free-slip mirror) enters GN and GS (see the module docstring).
+        cells: `bundles.Cells`. par: `bundles.PairParams`: coupled computes the
+        pressure-related sums (GP, GN, Q, SUM_A, SUM_AP, SUM_APSI); acc_term the div(k dv/dt)
+        sums GA; rho_l_b = rho_l * body force (N/m^3); the artificial stress f.astress (xx,
+        yy, xy; 3D: xx, yy, zz, xy, yz, zx) enters the pair stress with weight
+        (W(r) / w_dx)^as_n (C_ij of Eq. 26), off
+        at as_n = 0; p_weight = 1 puts the pore pressure in the pair's total stress (Eq. 26
+        as written), 0 leaves it out for `update.pore_pressure_force` to add it as a
+        corrected gradient; record writes the visited pairs (a, b) and grad_a W_ab to
+        rec (`bundles.PairRecord`) in visiting order, for `velocity_gradient_sums`.
+        Returns the number of pairs recorded, or -1 if rec.pairs is too short (the sums are
+        complete either way).
+        """
+        x, v, v_slip, stress, p, p_prev = f.x, f.v, f.v_slip, f.stress, f.p, f.p_prev
+        poro, vol, rho, perm, acc, astress = f.poro, f.vol, f.rho, f.perm, f.acc, f.astress
+        cell_start, order, ncell = cells.cell_start, cells.order, cells.ncell
+        h, tpi_alpha, av_alpha, av_beta = par.h, par.tpi_alpha, par.av_alpha, par.av_beta
+        c_sound, rho_l_b0, rho_l_b1 = par.c_sound, par.rho_l_b0, par.rho_l_b1
+        rho_l_b2 = par.rho_l_b2
+        coupled, acc_term, as_n, w_dx = par.coupled, par.acc_term, par.as_n, par.w_dx
+        p_weight, record = par.p_weight, par.record
+        pairs, pair_g = rec.pairs, rec.pair_g
+        n_pairs = 0
+        cap_pairs = pairs.shape[0]
+        for i in range(n_owned):
+            for c in range(nsums):
+                sums[i, c] = 0.0
+        ncx = ncell[0]
+        ncy = ncell[1]
+        ncz = ncell[2] if dim == 3 else 1
+        support2 = 4.0 * h * h
+        eps2 = 0.01 * h * h
+        for c in range(ncx * ncy * ncz):  # row-major, x fastest: the global cell order
+            cx = c % ncx
+            cy = (c // ncx) % ncy
+            cz = c // (ncx * ncy)
             for sa in range(cell_start[c], cell_start[c + 1]):
                 a = order[sa]
-                for k in range(5):
-                    nc, s0 = half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start)
+                for k in range(n_stencil):
+                    nc, s0 = half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz,
+                                             cell_start)
                     if nc < 0:
                         continue
                     for sb in range(s0, cell_start[nc + 1]):
@@ -122,13 +108,17 @@ def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
                             continue
                         dx0 = x[b, 0] - x[a, 0]
                         dx1 = x[b, 1] - x[a, 1]
+                        dx2 = x[b, 2] - x[a, 2] if dim == 3 else 0.0
                         r2 = dx0 * dx0 + dx1 * dx1
+                        if dim == 3:
+                            r2 += dx2 * dx2
                         if r2 >= support2 or r2 == 0.0:
                             continue
                         r = math.sqrt(r2)
-                        dw = dw_cubic(r, h)
+                        dw = dw_cubic_dim(r, h, dim)
                         g0 = -dw * dx0 / r  # grad_a W_ab; grad_b W_ba = -g
                         g1 = -dw * dx1 / r
+                        g2 = -dw * dx2 / r if dim == 3 else 0.0
                         f2 = -2.0 * dw / r  # 2 F_ab >= 0
                         if record:
                             if n_pairs < cap_pairs:
@@ -136,117 +126,128 @@ def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
                                 pairs[n_pairs, 1] = b
                                 pair_g[n_pairs, 0] = g0
                                 pair_g[n_pairs, 1] = g1
+                                if dim == 3:
+                                    pair_g[n_pairs, 2] = g2
                             n_pairs += 1
                         va = vol[a]
                         vb = vol[b]
                         dv0 = v[b, 0] - v[a, 0]
                         dv1 = v[b, 1] - v[a, 1]
+                        dv2 = v[b, 2] - v[a, 2] if dim == 3 else 0.0
                         ghost_pair = a >= n_real or b >= n_real
                         ds0 = dv0
                         ds1 = dv1
+                        ds2 = dv2
                         if ghost_pair:
                             ds0 = v_slip[b, 0] - v_slip[a, 0]
                             ds1 = v_slip[b, 1] - v_slip[a, 1]
+                            ds2 = v_slip[b, 2] - v_slip[a, 2] if dim == 3 else 0.0
                         # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
                         pab = p_weight * (p[a] + p[b])
                         sxx = stress[a, 0] + stress[b, 0] - pab
                         syy = stress[a, 1] + stress[b, 1] - pab
                         sxy = stress[a, 3] + stress[b, 3]
+                        szz = stress[a, 2] + stress[b, 2] - pab if dim == 3 else 0.0
+                        syz = stress[a, 4] + stress[b, 4] if dim == 3 else 0.0
+                        szx = stress[a, 5] + stress[b, 5] if dim == 3 else 0.0
                         if as_n > 0.0:
-                            fn = (w_cubic(r, h) / w_dx) ** as_n
+                            fn = (w_cubic_dim(r, h, dim) / w_dx) ** as_n
                             sxx += fn * (astress[a, 0] + astress[b, 0])
                             syy += fn * (astress[a, 1] + astress[b, 1])
-                            sxy += fn * (astress[a, 2] + astress[b, 2])
-                        f0 = sxx * g0 + sxy * g1
-                        f1 = sxy * g0 + syy * g1
-                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26), on the
-                        # free-slip relative velocity: see "Walls" in the module docstring
+                            sxy += fn * (astress[a, as_xy] + astress[b, as_xy])
+                            if dim == 3:
+                                szz += fn * (astress[a, 2] + astress[b, 2])
+                                syz += fn * (astress[a, 4] + astress[b, 4])
+                                szx += fn * (astress[a, 5] + astress[b, 5])
+                        t0 = sxx * g0 + sxy * g1
+                        t1 = sxy * g0 + syy * g1
+                        t2 = 0.0
+                        if dim == 3:
+                            t0 += szx * g2
+                            t1 += syz * g2
+                            t2 = szx * g0 + syz * g1 + szz * g2
+                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26), on
+                        # the free-slip relative velocity: "Walls" in the module docstring
                         pi_ab = 0.0
                         vdotr = ds0 * dx0 + ds1 * dx1
+                        if dim == 3:
+                            vdotr += ds2 * dx2
                         if vdotr < 0.0:
                             mu = h * vdotr / (r2 + eps2)
                             pi_ab = (-av_alpha * c_sound * mu + av_beta * mu * mu) / (
                                 0.5 * (rho[a] + rho[b]))
+                        dp = kbar = pta = ptb = dpsi = 0.0
                         if coupled:
                             dp = p[b] - p[a]
                             kbar = 0.5 * (perm[a] + perm[b])
                             pta = p[a] + tpi_alpha * (p[a] - p_prev[a])
                             ptb = p[b] + tpi_alpha * (p[b] - p_prev[b])
-                            dpsi = -(rho_l_b0 * dx0 + rho_l_b1 * dx1)
-                        if own_a:
-                            sums[a, M_XX] += vb * dx0 * g0
-                            sums[a, M_XY] += vb * dx0 * g1
-                            sums[a, M_YX] += vb * dx1 * g0
-                            sums[a, M_YY] += vb * dx1 * g1
-                            sums[a, GV_XX] += vb * dv0 * g0
-                            sums[a, GV_XY] += vb * dv0 * g1
-                            sums[a, GV_YX] += vb * dv1 * g0
-                            sums[a, GV_YY] += vb * dv1 * g1
-                            if ghost_pair:
-                                sums[a, GS_XX] += vb * (ds0 - dv0) * g0
-                                sums[a, GS_XY] += vb * (ds0 - dv0) * g1
-                                sums[a, GS_YX] += vb * (ds1 - dv1) * g0
-                                sums[a, GS_YY] += vb * (ds1 - dv1) * g1
-                            sums[a, DVDT_X] += vb * f0 / rho[a] - rho[b] * vb * pi_ab * g0
-                            sums[a, DVDT_Y] += vb * f1 / rho[a] - rho[b] * vb * pi_ab * g1
-                            if coupled:
-                                sums[a, GP_X] += vb * dp * g0
-                                sums[a, GP_Y] += vb * dp * g1
-                                wn = vb * (1.0 - poro[b])
-                                sums[a, GN_XX] += wn * ds0 * g0
-                                sums[a, GN_XY] += wn * ds0 * g1
-                                sums[a, GN_YX] += wn * ds1 * g0
-                                sums[a, GN_YY] += wn * ds1 * g1
-                                sums[a, Q_X] += vb * dx0 * f2
-                                sums[a, Q_Y] += vb * dx1 * f2
-                                aab = vb * kbar * f2
-                                sums[a, SUM_A] += aab
-                                sums[a, SUM_AP] += aab * ptb
-                                sums[a, SUM_APSI] += aab * dpsi
-                        if own_b:
-                            sums[b, M_XX] += va * dx0 * g0
-                            sums[b, M_XY] += va * dx0 * g1
-                            sums[b, M_YX] += va * dx1 * g0
-                            sums[b, M_YY] += va * dx1 * g1
-                            sums[b, GV_XX] += va * dv0 * g0
-                            sums[b, GV_XY] += va * dv0 * g1
-                            sums[b, GV_YX] += va * dv1 * g0
-                            sums[b, GV_YY] += va * dv1 * g1
-                            if ghost_pair:
-                                sums[b, GS_XX] += va * (ds0 - dv0) * g0
-                                sums[b, GS_XY] += va * (ds0 - dv0) * g1
-                                sums[b, GS_YX] += va * (ds1 - dv1) * g0
-                                sums[b, GS_YY] += va * (ds1 - dv1) * g1
-                            sums[b, DVDT_X] += -va * f0 / rho[b] + rho[a] * va * pi_ab * g0
-                            sums[b, DVDT_Y] += -va * f1 / rho[b] + rho[a] * va * pi_ab * g1
-                            if coupled:
-                                sums[b, GP_X] += va * dp * g0
-                                sums[b, GP_Y] += va * dp * g1
-                                wn = va * (1.0 - poro[a])
-                                sums[b, GN_XX] += wn * ds0 * g0
-                                sums[b, GN_XY] += wn * ds0 * g1
-                                sums[b, GN_YX] += wn * ds1 * g0
-                                sums[b, GN_YY] += wn * ds1 * g1
-                                sums[b, Q_X] -= va * dx0 * f2
-                                sums[b, Q_Y] -= va * dx1 * f2
-                                aba = va * kbar * f2
-                                sums[b, SUM_A] += aba
-                                sums[b, SUM_AP] += aba * pta
-                                sums[b, SUM_APSI] -= aba * dpsi
+                            head = rho_l_b0 * dx0 + rho_l_b1 * dx1
+                            if dim == 3:
+                                head += rho_l_b2 * dx2
+                            dpsi = -head
+                        ka0 = ka1 = ka2 = 0.0
                         if acc_term and coupled:
                             ka0 = perm[b] * acc[b, 0] - perm[a] * acc[a, 0]
                             ka1 = perm[b] * acc[b, 1] - perm[a] * acc[a, 1]
-                            if own_a:
-                                sums[a, GA_XX] += vb * ka0 * g0
-                                sums[a, GA_XY] += vb * ka0 * g1
-                                sums[a, GA_YX] += vb * ka1 * g0
-                                sums[a, GA_YY] += vb * ka1 * g1
-                            if own_b:
-                                sums[b, GA_XX] += va * ka0 * g0
-                                sums[b, GA_XY] += va * ka0 * g1
-                                sums[b, GA_YX] += va * ka1 * g0
-                                sums[b, GA_YY] += va * ka1 * g1
-    return n_pairs if n_pairs <= cap_pairs else -1
+                            ka2 = perm[b] * acc[b, 2] - perm[a] * acc[a, 2] if dim == 3 else 0.0
+                        # a's sums with V_b, then b's with V_a (x_ab and g change sign)
+                        for side in range(2):
+                            i = a if side == 0 else b
+                            if not (own_a if side == 0 else own_b):
+                                continue
+                            j = b if side == 0 else a
+                            vj = vol[j]
+                            for m in range(dim):
+                                xm = pick(m, dx0, dx1, dx2)
+                                dvm = pick(m, dv0, dv1, dv2)
+                                for q in range(dim):
+                                    gq = pick(q, g0, g1, g2)
+                                    sums[i, cm + m * dim + q] += vj * xm * gq
+                                    sums[i, cgv + m * dim + q] += vj * dvm * gq
+                            if ghost_pair:
+                                for m in range(dim):
+                                    ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
+                                    for q in range(dim):
+                                        sums[i, cgs + m * dim + q] += vj * ddm * pick(q, g0, g1, g2)
+                            for m in range(dim):
+                                tm = pick(m, t0, t1, t2)
+                                gm = pick(m, g0, g1, g2)
+                                if side == 0:
+                                    sums[i, cdv + m] += vb * tm / rho[a] - rho[b] * vb * pi_ab * gm
+                                else:
+                                    sums[i, cdv + m] += -va * tm / rho[b] + rho[a] * va * pi_ab * gm
+                            if coupled:
+                                wn = vj * (1.0 - poro[j])
+                                for m in range(dim):
+                                    gm = pick(m, g0, g1, g2)
+                                    sums[i, cgp + m] += vj * dp * gm
+                                    dsm = pick(m, ds0, ds1, ds2)
+                                    for q in range(dim):
+                                        sums[i, cgn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
+                                    if side == 0:
+                                        sums[i, cq + m] += vj * pick(m, dx0, dx1, dx2) * f2
+                                    else:
+                                        sums[i, cq + m] -= vj * pick(m, dx0, dx1, dx2) * f2
+                                aij = vj * kbar * f2
+                                sums[i, ca] += aij
+                                sums[i, cap_] += aij * (ptb if side == 0 else pta)
+                                if side == 0:
+                                    sums[i, capsi] += aij * dpsi
+                                else:
+                                    sums[i, capsi] -= aij * dpsi
+                            if acc_term and coupled:
+                                for m in range(dim):
+                                    kam = pick(m, ka0, ka1, ka2)
+                                    for q in range(dim):
+                                        sums[i, cga + m * dim + q] += vj * kam * pick(q, g0, g1, g2)
+        return n_pairs if n_pairs <= cap_pairs else -1
+
+    return pair_sums
+
+
+pair_sums = make_pair_sums(2)
+pair_sums_3d = make_pair_sums(3)
 
 
 def make_velocity_gradient_sums(dim: int):
