@@ -39,8 +39,8 @@ OUT = ROOT / "bench" / "out"
 HAND_WRITTEN = "7d83a70"  # the last revision with the hand-written 2D sweep
 
 
-def hand_written_sweep():
-    """`velocity_gradient_sums` of revision HAND_WRITTEN, loaded from git."""
+def hand_written():
+    """psph/kernels/interactions.py of revision HAND_WRITTEN, loaded from git."""
     source = subprocess.run(["git", "-C", str(ROOT), "show",
                              f"{HAND_WRITTEN}:psph/kernels/interactions.py"], check=True,
                             capture_output=True, text=True).stdout
@@ -49,7 +49,7 @@ def hand_written_sweep():
     spec = importlib.util.spec_from_file_location("interactions_2d", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.velocity_gradient_sums
+    return module
 
 
 @nb.njit(error_model="numpy")
@@ -147,6 +147,43 @@ def cloud(dim: int, side: int, seed: int = 0):
     return args, n, m
 
 
+def fused_sweeps(hand_pair_sums) -> list[dict]:
+    """The fused pair sweep (`pair_sums`, cell lists and all the sums of a coupled step)
+    hand-written (HAND_WRITTEN) and from the factory, interleaved, on a 2D cloud."""
+    from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
+    from psph.kernels.interactions import pair_sums
+
+    rng = np.random.default_rng(1)
+    dx, h, side = 0.01, 0.012, 141
+    g = (np.arange(side) + 0.5) * dx
+    x = np.array(np.meshgrid(g, g, indexing="ij")).reshape(2, -1).T
+    x += rng.uniform(-0.2, 0.2, x.shape) * dx
+    n = len(x)
+    fields = PairFields(x, rng.normal(size=(n, 2)), rng.normal(size=(n, 2)),
+                        rng.normal(size=(n, 4)), rng.normal(size=n), rng.normal(size=n),
+                        rng.uniform(0.3, 0.5, n), np.full(n, dx * dx),
+                        rng.uniform(1.8e3, 2e3, n), rng.uniform(1e-4, 2e-4, n),
+                        rng.normal(size=(n, 2)), np.zeros((n, 3)))
+    cells = Cells(*cell_lists(x, h))
+    par = PairParams(h, 0.5, 1.0, 0.0, 20.0, 0.0, -9810.0, True, False, 0.0, 1.0, 1.0,
+                     True).typed()
+    rec = PairRecord(np.zeros((30 * n, 2), np.int64), np.zeros((30 * n, 2)))
+    sums = {"hand": np.zeros((n, NSUMS)), "factory": np.zeros((n, NSUMS))}
+    funcs = {"hand": hand_pair_sums, "factory": pair_sums}
+    best: dict[str, float] = {}
+    for _ in range(15):  # interleaved: a change of machine load hits both alike
+        for name, f in funcs.items():
+            best[name] = min(best.get(name, np.inf), best_ms(
+                f, (n, n - 100, n - 300, fields, cells, par, sums[name], rec), repeats=1,
+                calls=5))
+    m = pair_sums(n, n - 100, n - 300, fields, cells, par, sums["factory"], rec)
+    same = bool(np.array_equal(sums["hand"], sums["factory"]))
+    return [{"variant": f"fused pair sweep, {label}", "dim": 2, "pairs": m, "ms": best[k],
+             "ns_per_pair": 1e6 * best[k] / m, "bitwise_2d": same}
+            for k, label in (("hand", f"hand-written ({HAND_WRITTEN})"),
+                             ("factory", "factory (the code's)"))]
+
+
 def best_ms(f, args, extra=(), repeats=7, calls=20) -> float:
     f(*args, *extra)
     best = np.inf
@@ -161,7 +198,8 @@ def best_ms(f, args, extra=(), repeats=7, calls=20) -> float:
 def main() -> None:
     args2, n2, m2 = cloud(2, 141)
     reference = np.zeros((n2, NSUMS))
-    hand = hand_written_sweep()
+    old = hand_written()
+    hand = old.velocity_gradient_sums
     rows = []
     variants = (("hand-written 2D (7d83a70)", hand, ()),
                 ("factory (the code's)", velocity_gradient_sums, ()),
@@ -174,6 +212,7 @@ def main() -> None:
         rows.append({"variant": name, "dim": 2, "pairs": m2, "ms": ms,
                      "ns_per_pair": 1e6 * ms / m2,
                      "bitwise_2d": bool(np.array_equal(sums, reference))})
+    rows += fused_sweeps(old.pair_sums)
     args3, n3, m3 = cloud(3, 27)
     ms = best_ms(velocity_gradient_sums_3d, args3 + (np.zeros((n3, sum_layout(3).NSUMS)),))
     rows.append({"variant": "factory (the code's), 3D", "dim": 3, "pairs": m3, "ms": ms,

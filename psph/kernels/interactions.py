@@ -34,7 +34,7 @@ import math
 import numba as nb
 
 from psph.kernels.dims import pick
-from psph.kernels.neighbours import half_stencil_3d
+from psph.kernels.neighbours import half_stencil, half_stencil_3d
 from psph.kernels.spline import dw_cubic_dim, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
 
@@ -89,15 +89,23 @@ def make_pair_sums(dim: int):
         ncz = ncell[2] if dim == 3 else 1
         support2 = 4.0 * h * h
         eps2 = 0.01 * h * h
+        cx, cy, cz = -1, 0, 0
         for c in range(ncx * ncy * ncz):  # row-major, x fastest: the global cell order
-            cx = c % ncx
-            cy = (c // ncx) % ncy
-            cz = c // (ncx * ncy)
+            cx += 1
+            if cx == ncx:
+                cx = 0
+                cy += 1
+                if cy == ncy:
+                    cy = 0
+                    cz += 1
             for sa in range(cell_start[c], cell_start[c + 1]):
                 a = order[sa]
                 for k in range(n_stencil):
-                    nc, s0 = half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz,
-                                             cell_start)
+                    if dim == 2:  # spelt out: the 2D sweep is 4 % faster with it
+                        nc, s0 = half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start)
+                    else:
+                        nc, s0 = half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz,
+                                                 cell_start)
                     if nc < 0:
                         continue
                     for sb in range(s0, cell_start[nc + 1]):
@@ -191,56 +199,84 @@ def make_pair_sums(dim: int):
                             ka0 = perm[b] * acc[b, 0] - perm[a] * acc[a, 0]
                             ka1 = perm[b] * acc[b, 1] - perm[a] * acc[a, 1]
                             ka2 = perm[b] * acc[b, 2] - perm[a] * acc[a, 2] if dim == 3 else 0.0
+                        # every load before the first store into sums (which may alias
+                        # them and would force reloads: dims.py)
+                        rho_a = rho[a]
+                        rho_b = rho[b]
+                        visc_a = rho_b * vb * pi_ab
+                        visc_b = rho_a * va * pi_ab
+                        poro_a = poro[a]
+                        poro_b = poro[b]
                         # a's sums with V_b, then b's with V_a (x_ab and g change sign)
-                        for side in range(2):
-                            i = a if side == 0 else b
-                            if not (own_a if side == 0 else own_b):
-                                continue
-                            j = b if side == 0 else a
-                            vj = vol[j]
+                        if own_a:
                             for m in range(dim):
                                 xm = pick(m, dx0, dx1, dx2)
+                                for q in range(dim):
+                                    sums[a, cm + m * dim + q] += vb * xm * pick(q, g0, g1, g2)
+                            for m in range(dim):
                                 dvm = pick(m, dv0, dv1, dv2)
                                 for q in range(dim):
-                                    gq = pick(q, g0, g1, g2)
-                                    sums[i, cm + m * dim + q] += vj * xm * gq
-                                    sums[i, cgv + m * dim + q] += vj * dvm * gq
+                                    sums[a, cgv + m * dim + q] += vb * dvm * pick(q, g0, g1, g2)
                             if ghost_pair:
                                 for m in range(dim):
                                     ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
                                     for q in range(dim):
-                                        sums[i, cgs + m * dim + q] += vj * ddm * pick(q, g0, g1, g2)
+                                        sums[a, cgs + m * dim + q] += vb * ddm * pick(q, g0, g1, g2)
                             for m in range(dim):
-                                tm = pick(m, t0, t1, t2)
-                                gm = pick(m, g0, g1, g2)
-                                if side == 0:
-                                    sums[i, cdv + m] += vb * tm / rho[a] - rho[b] * vb * pi_ab * gm
-                                else:
-                                    sums[i, cdv + m] += -va * tm / rho[b] + rho[a] * va * pi_ab * gm
+                                sums[a, cdv + m] += (vb * pick(m, t0, t1, t2) / rho_a
+                                                     - visc_a * pick(m, g0, g1, g2))
                             if coupled:
-                                wn = vj * (1.0 - poro[j])
+                                wn = vb * (1.0 - poro_b)
                                 for m in range(dim):
                                     gm = pick(m, g0, g1, g2)
-                                    sums[i, cgp + m] += vj * dp * gm
+                                    sums[a, cgp + m] += vb * dp * gm
                                     dsm = pick(m, ds0, ds1, ds2)
                                     for q in range(dim):
-                                        sums[i, cgn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
-                                    if side == 0:
-                                        sums[i, cq + m] += vj * pick(m, dx0, dx1, dx2) * f2
-                                    else:
-                                        sums[i, cq + m] -= vj * pick(m, dx0, dx1, dx2) * f2
-                                aij = vj * kbar * f2
-                                sums[i, ca] += aij
-                                sums[i, cap_] += aij * (ptb if side == 0 else pta)
-                                if side == 0:
-                                    sums[i, capsi] += aij * dpsi
-                                else:
-                                    sums[i, capsi] -= aij * dpsi
-                            if acc_term and coupled:
+                                        sums[a, cgn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
+                                    sums[a, cq + m] += vb * pick(m, dx0, dx1, dx2) * f2
+                                aij = vb * kbar * f2
+                                sums[a, ca] += aij
+                                sums[a, cap_] += aij * ptb
+                                sums[a, capsi] += aij * dpsi
+                        if own_b:
+                            for m in range(dim):
+                                xm = pick(m, dx0, dx1, dx2)
+                                for q in range(dim):
+                                    sums[b, cm + m * dim + q] += va * xm * pick(q, g0, g1, g2)
+                            for m in range(dim):
+                                dvm = pick(m, dv0, dv1, dv2)
+                                for q in range(dim):
+                                    sums[b, cgv + m * dim + q] += va * dvm * pick(q, g0, g1, g2)
+                            if ghost_pair:
                                 for m in range(dim):
-                                    kam = pick(m, ka0, ka1, ka2)
+                                    ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
                                     for q in range(dim):
-                                        sums[i, cga + m * dim + q] += vj * kam * pick(q, g0, g1, g2)
+                                        sums[b, cgs + m * dim + q] += va * ddm * pick(q, g0, g1, g2)
+                            for m in range(dim):
+                                sums[b, cdv + m] += (-va * pick(m, t0, t1, t2) / rho_b
+                                                     + visc_b * pick(m, g0, g1, g2))
+                            if coupled:
+                                wn = va * (1.0 - poro_a)
+                                for m in range(dim):
+                                    gm = pick(m, g0, g1, g2)
+                                    sums[b, cgp + m] += va * dp * gm
+                                    dsm = pick(m, ds0, ds1, ds2)
+                                    for q in range(dim):
+                                        sums[b, cgn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
+                                    sums[b, cq + m] -= va * pick(m, dx0, dx1, dx2) * f2
+                                aij = va * kbar * f2
+                                sums[b, ca] += aij
+                                sums[b, cap_] += aij * pta
+                                sums[b, capsi] -= aij * dpsi
+                        if acc_term and coupled:
+                            for m in range(dim):
+                                kam = pick(m, ka0, ka1, ka2)
+                                for q in range(dim):
+                                    gq = pick(q, g0, g1, g2)
+                                    if own_a:
+                                        sums[a, cga + m * dim + q] += vb * kam * gq
+                                    if own_b:
+                                        sums[b, cga + m * dim + q] += va * kam * gq
         return n_pairs if n_pairs <= cap_pairs else -1
 
     return pair_sums

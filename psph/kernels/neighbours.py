@@ -49,9 +49,25 @@ def half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start):
 
 @nb.njit(cache=True, inline="always")
 def half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start):
-    """`half_stencil_3d` of a 2D grid: k = 0: the rest of cell c after slot sa; then
-    (+1, 0), (-1, +1), (0, +1), (+1, +1)."""
-    return half_stencil_3d(k, c, sa, cx, cy, 0, ncx, ncy, 1, cell_start)
+    """`half_stencil_3d` of a 2D grid, spelt out (the 2D pair loops run it for every
+    particle): k = 0: the rest of cell c after slot sa; then (+1, 0), (-1, +1), (0, +1),
+    (+1, +1)."""
+    if k == 0:
+        return c, sa + 1
+    if k == 1:
+        ox, oy = 1, 0
+    elif k == 2:
+        ox, oy = -1, 1
+    elif k == 3:
+        ox, oy = 0, 1
+    else:
+        ox, oy = 1, 1
+    nx = cx + ox
+    ny = cy + oy
+    if nx < 0 or nx >= ncx or ny >= ncy:
+        return -1, 0
+    nc = ny * ncx + nx
+    return nc, cell_start[nc]
 
 
 @nb.njit(cache=True, inline="always")
