@@ -19,8 +19,18 @@ over the positive roots of (1 - eta xi^2 / 2) tan xi = xi, with
 G the shear and M = K + 4 G / 3 the constrained modulus; c is Terzaghi's c_v of the same
 soil (`terzaghi.py`). The centre pressure first rises above p0 (the Mandel-Cryer effect:
 the drained rim contracts and squeezes the core) before it decays. The series sums to 1 at
-t = 0; `tests/test_cryer.py` checks it against a radial finite-volume solution of the same
-equations.
+t = 0; `radial_centre_pressure` solves the same equations on a radial grid, an independent
+check of the series (`tests/test_cryer.py`):
+
+Radial symmetry makes the displacement irrotational, so equilibrium gives M e - p = f(t)
+(e the volumetric strain, uniform f), and the drained surface under the confining
+pressure q fixes f = (-q + beta <p>) / (1 - beta), beta = 4 G / (3 M), <p> the sphere's
+mean pressure. The mass balance (n / K_l) dp/dt + de/dt = (k / gamma_l) lap p becomes, in
+P = p / p0, tau = c t / a^2 and r / a,
+
+    dP/dtau + gamma <dP/dtau> = lap P,   gamma = 4 G / (3 K (1 + n M / K_l)),
+
+P = 1 at tau = 0, P = 0 on the surface.
 """
 
 import math
@@ -113,3 +123,35 @@ class Cryer:
         xi, a = self.coefficients(count)
         tau = np.atleast_1d(self.time_factor(t))
         return self.p0 * (np.exp(-np.outer(tau, xi * xi)) @ a).reshape(np.shape(t))
+
+
+def radial_centre_pressure(cryer: Cryer, taus: np.ndarray, cells: int = 300,
+                           dtau: float = 1e-4) -> np.ndarray:
+    """p / p0 at the innermost cell centre (r = a / (2 cells)) at each tau of `taus`
+    (increasing): the equations of the module docstring by Crank-Nicolson on finite
+    volumes."""
+    h = 1.0 / cells
+    i = np.arange(cells)
+    vol = ((i + 1.0) ** 3 - i ** 3) * h ** 3 / 3.0
+    weights = vol / vol.sum()  # <P> = weights . P
+    area = ((i + 1.0) * h) ** 2  # the outer face of each cell
+    lap = np.zeros((cells, cells))
+    for k in range(cells - 1):  # the face between cells k and k + 1
+        flux = area[k] / h
+        lap[k, k] -= flux / vol[k]
+        lap[k, k + 1] += flux / vol[k]
+        lap[k + 1, k + 1] -= flux / vol[k + 1]
+        lap[k + 1, k] += flux / vol[k + 1]
+    lap[-1, -1] -= area[-1] / (0.5 * h) / vol[-1]  # P = 0 on the surface, h/2 away
+    g = 4.0 * cryer.shear / (3.0 * cryer.bulk * (
+        1.0 + cryer.porosity * cryer.modulus / cryer.bulk_water))
+    mass = np.eye(cells) + g * np.outer(np.ones(cells), weights)
+    step = np.linalg.solve(mass - 0.5 * dtau * lap, mass + 0.5 * dtau * lap)
+    p = np.ones(cells)
+    out, tau = [], 0.0
+    for target in taus:
+        while tau < target - 1e-12:
+            p = step @ p
+            tau += dtau
+        out.append(p[0])
+    return np.array(out)
