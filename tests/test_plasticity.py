@@ -287,3 +287,36 @@ def test_dilation_decays_with_its_own_strain():
         b = dp_return(*s, eps, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
                       law["eta"], s_f)
         assert np.array_equal(np.array(a).view(np.int64), np.array(b).view(np.int64))
+
+
+def test_return_in_3d_is_isotropic_and_plane_strain_is_its_case():
+    """`dp_return_3d`: returning a rotated trial stress gives the rotated return (the law
+    is isotropic: all six components take part); with yz = zx = 0 it is `dp_return`, bit
+    for bit; every returned state lies on or inside the softened surface."""
+    from psph.kernels.plasticity import dp_return_3d
+
+    rng = np.random.default_rng(11)
+    voigt = [[0, 3, 5], [3, 1, 4], [5, 4, 2]]  # xx yy zz xy yz zx
+    phi_p, phi_r, c_p, c_r = math.radians(30.0), math.radians(20.0), 5e3, 1e3
+    psi0, eta, s_f = math.radians(-5.0), 5.0, 2.0
+    args = (0.0, K, G, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+    for _ in range(40):
+        trial = rng.normal(size=6) * 40e3 - [20e3, 20e3, 20e3, 0, 0, 0]
+        eps = rng.uniform(0.0, 0.3)
+        a = np.asarray(trial)[voigt]
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        b = q @ a @ q.T
+        rb = dp_return_3d(b[0, 0], b[1, 1], b[2, 2], b[0, 1], b[1, 2], b[2, 0], eps, *args[1:])
+        ra = dp_return_3d(*trial, eps, *args[1:])
+        ret_a = np.asarray(ra[:6])[voigt]
+        ret_b = np.asarray(rb[:6])[voigt]
+        assert np.allclose(q @ ret_a @ q.T, ret_b, rtol=1e-9, atol=1e-6)
+        assert ra[6:] == pytest.approx(rb[6:], rel=1e-9, abs=1e-12)
+        phi, c, _ = softened(eps + ra[7], phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+        xi, kap = dp_constants(phi, c)
+        dev = ret_a - np.trace(ret_a) / 3.0 * np.eye(3)
+        f = xi * np.trace(ret_a) + np.sqrt(0.5 * np.sum(dev * dev)) - kap
+        assert f <= 1e-6 * kap
+        plane = dp_return(trial[0], trial[1], trial[2], trial[3], eps, *args[1:])
+        r3 = dp_return_3d(trial[0], trial[1], trial[2], trial[3], 0.0, 0.0, eps, *args[1:])
+        assert plane == (r3[0], r3[1], r3[2], r3[3], r3[6], r3[7], r3[8])

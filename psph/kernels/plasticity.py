@@ -1,6 +1,9 @@
-"""Drucker-Prager strain-softening plasticity (Section 2.2), plane strain, per particle.
+"""Drucker-Prager strain-softening plasticity (Section 2.2), per particle, in 3D and in
+plane strain.
 
-Stress components (xx, yy, zz, xy), effective, tension positive. Yield function Eq. (14)
+Stress components (xx, yy, zz, xy, yz, zx), effective, tension positive; plane strain is
+the case yz = zx = 0 (`dp_return`, the same bits as before the 3D components: they only
+add zeros to J2). Yield function Eq. (14)
 f = xi_phi I1 + sqrt(J2) - kappa_c and plastic potential Eq. (15) g = xi_psi I1 +
 sqrt(J2), with the plane-strain constants of Eq. (16) and the softening laws of
 Eq. (17)-(19) in the equivalent plastic strain. The return mapping is the semi-implicit
@@ -38,22 +41,32 @@ def softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f):
 
 
 @nb.njit(cache=True, inline="always")
-def _invariants(sxx, syy, szz, sxy):
+def _invariants(sxx, syy, szz, sxy, syz, szx):
     i1 = sxx + syy + szz
     m = i1 / 3.0
     dxx = sxx - m
     dyy = syy - m
     dzz = szz - m
-    j2 = 0.5 * (dxx * dxx + dyy * dyy + dzz * dzz) + sxy * sxy
+    j2 = 0.5 * (dxx * dxx + dyy * dyy + dzz * dzz) + sxy * sxy + syz * syz + szx * szx
     return i1, dxx, dyy, dzz, j2
 
 
 @nb.njit(cache=True)
 def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
               s_f, tension=math.inf, eps_dilation=-1.0):
+    """`dp_return_3d` in plane strain (yz = zx = 0): (sxx, syy, szz, sxy, d_lambda,
+    d_eps_p, d_w)."""
+    r = dp_return_3d(sxx, syy, szz, sxy, 0.0, 0.0, eps_p, bulk, shear, phi_p, phi_r, c_p,
+                     c_r, psi0, eta, s_f, tension, eps_dilation)
+    return r[0], r[1], r[2], r[3], r[6], r[7], r[8]
+
+
+@nb.njit(cache=True)
+def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r,
+                 psi0, eta, s_f, tension=math.inf, eps_dilation=-1.0):
     """Return the trial stress to the Drucker-Prager surface.
 
-    Returns (sxx, syy, szz, sxy, d_lambda, d_eps_p, d_w): the corrected stress, the
+    Returns (sxx, syy, szz, sxy, syz, szx, d_lambda, d_eps_p, d_w): the corrected stress, the
     plastic multiplier of Eq. (13), the increment of the equivalent plastic strain
     d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain = d_lambda / sqrt(3),
     and the plastic work increment d_w = sigma : d eps_p (J/m^3, `plastic_work`).
@@ -75,11 +88,11 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
         psi = psi0 * math.exp(-s_f * eps_dilation)
     xi, kap = dp_constants(phi, c)
     xi_psi = dp_constants(psi, 0.0)[0]
-    i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy)
+    i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)
     rj2 = math.sqrt(j2)
     f = xi * i1 + rj2 - kap
     if not f > 0.0 and not i1 > 3.0 * tension:
-        return sxx, syy, szz, sxy, 0.0, 0.0, 0.0
+        return sxx, syy, szz, sxy, syz, szx, 0.0, 0.0, 0.0
     d_lam = 0.0
     if f > 0.0 and rj2 > 1e-12 * (abs(i1) + kap + 1.0):
         # df/d eps_p of the softened surface: d(xi)/d eps I1 - d(kappa)/d eps
@@ -115,6 +128,8 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
             syy = tension + r * dyy
             szz = tension + r * dzz
             sxy = r * sxy
+            syz = r * syz
+            szx = r * szx
         else:
             shift = d_lam * 3.0 * bulk * xi_psi
             scale = d_lam * shear / rj2
@@ -122,11 +137,13 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
             syy = syy - shift - scale * dyy
             szz = szz - shift - scale * dzz
             sxy = sxy - scale * sxy
+            syz = syz - scale * syz
+            szx = szx - scale * szx
     d_eps = d_lam / math.sqrt(3.0)
     # the surface at the updated plastic strain
     phi, c, psi = softened(eps_p + d_eps, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
     xi, kap = dp_constants(phi, c)
-    i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy)
+    i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)
     # tension cracking: beyond the apex I1 = kappa / xi, move the mean stress back to it
     if xi > 0.0 and xi * i1 > kap:
         shift = (i1 - kap / xi) / 3.0
@@ -151,17 +168,19 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
         syy = m + r * dyy
         szz = m + r * dzz
         sxy = r * sxy
-    d_w = plastic_work_increment(sxx, syy, szz, sxy, d_lam, xi_psi)
-    return sxx, syy, szz, sxy, d_lam, d_eps, d_w
+        syz = r * syz
+        szx = r * szx
+    d_w = plastic_work_increment(sxx, syy, szz, sxy, syz, szx, d_lam, xi_psi)
+    return sxx, syy, szz, sxy, syz, szx, d_lam, d_eps, d_w
 
 
 @nb.njit(cache=True, inline="always")
-def plastic_work_increment(sxx, syy, szz, sxy, d_lam, xi_psi):
+def plastic_work_increment(sxx, syy, szz, sxy, syz, szx, d_lam, xi_psi):
     """sigma : d eps_p (J/m^3) of one return: d eps_p = d_lambda dg/dsigma with the
     potential g = xi_psi I1 + sqrt(J2) of Eq. (15), homogeneous of degree 1 in sigma, so
     sigma : dg/dsigma = g and d_w = d_lambda (xi_psi I1 + sqrt(J2)) at the returned stress
     (xi_psi of Eq. 16 at the softened psi of Eq. 19 that set the flow direction)."""
     if d_lam == 0.0:
         return 0.0
-    i1, _, _, _, j2 = _invariants(sxx, syy, szz, sxy)
+    i1, _, _, _, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)
     return d_lam * (xi_psi * i1 + math.sqrt(j2))
