@@ -123,10 +123,11 @@ class StepParams(NamedTuple):
     plastic: bool
     ponding: int
     kicked: bool
+    b2: float = 0.0  # the body force's third component (3D)
 
     def typed(self) -> "StepParams":
         """The same values as the compiled types (float, int, bool)."""
-        kinds = (float,) * 8 + (int, float, bool, bool, bool, int, bool)
+        kinds = (float,) * 8 + (int, float, bool, bool, bool, int, bool, float)
         return StepParams(*(k(v) for k, v in zip(kinds, self, strict=True)))
 
 

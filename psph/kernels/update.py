@@ -10,7 +10,8 @@ import math
 
 import numba as nb
 
-from psph.kernels.plasticity import dp_return
+from psph.kernels.kinematics import inverse_moment_3d, jaumann_elastic_3d, velocity_gradient_3d
+from psph.kernels.plasticity import dp_return, dp_return_3d
 from psph.kernels.sum_columns import (
     DVDT_X,
     DVDT_Y,
@@ -38,9 +39,8 @@ from psph.kernels.sum_columns import (
     M_YY,
     Q_X,
     Q_Y,
-    SUM_A,
-    SUM_AP,
     SUM_APSI,
+    sum_layout,
 )
 
 SCHEME_NONE = 0
@@ -106,21 +106,27 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, beta, dt):
 
 
 @nb.njit(cache=True, inline="always")
-def _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1, damping,
-              dt):
-    """dv/dt of Eq. (45): Eq. (26) (sums 23-24) + body force + damping Eq. (43)-(44) +
-    surface tractions; stored in acc and applied to v."""
-    a0 = s[DVDT_X] + b0 - damping * v[i, 0]
-    a1 = s[DVDT_Y] + b1 - damping * v[i, 1]
+def _momentum(i, s, cdv, v, acc, rho, vol, load_index, traction, load_value, b0, b1, b2,
+              damping, dt, dim):
+    """dv/dt of Eq. (45): Eq. (26) (the sums from column cdv) + body force + damping
+    Eq. (43)-(44) + surface tractions; stored in acc and applied to v (dim components)."""
+    a0 = s[cdv] + b0 - damping * v[i, 0]
+    a1 = s[cdv + 1] + b1 - damping * v[i, 1]
+    a2 = s[cdv + 2] + b2 - damping * v[i, 2] if dim == 3 else 0.0
     li = int(load_index[i])
     if li >= 0:
         mass = rho[i] * vol[i]
         a0 += load_value[li] * traction[i, 0] / mass
         a1 += load_value[li] * traction[i, 1] / mass
+        if dim == 3:
+            a2 += load_value[li] * traction[i, 2] / mass
     acc[i, 0] = a0
     acc[i, 1] = a1
     v[i, 0] += dt * a0
     v[i, 1] += dt * a1
+    if dim == 3:
+        acc[i, 2] = a2
+        v[i, 2] += dt * a2
 
 
 @nb.njit(cache=True, inline="always")
@@ -207,174 +213,248 @@ def pore_pressure_force(n_owned, sums, rho, corrected, norm, share):
             s[DVDT_Y] -= share * norm * s[GP_Y] / rho[i]
 
 
-@nb.njit(cache=True, error_model="numpy")
-def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
-         damping, dt):
-    """The kick of the symplectic step, v^(n+1) = v^n + dt a^n (Eq. 45 at the state of
-    step n); `advance(..., kicked=True)` then takes the rates from v^(n+1)."""
-    for i in range(n_owned):
-        _momentum(i, sums[i], v, acc, rho, vol, load_index, traction, load_value, b0, b1,
-                  damping, dt)
+def make_kick(dim: int):
+    """`kick` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
+    cdv = sum_layout(dim).DVDT
+
+    @nb.njit(cache=True, error_model="numpy")
+    def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
+             damping, dt, b2=0.0):
+        """The kick of the symplectic step, v^(n+1) = v^n + dt a^n (Eq. 45 at the state of
+        step n); `advance(..., kicked=True)` then takes the rates from v^(n+1)."""
+        for i in range(n_owned):
+            _momentum(i, sums[i], cdv, v, acc, rho, vol, load_index, traction, load_value,
+                      b0, b1, b2, damping, dt, dim)
+
+    return kick
 
 
-@nb.njit(cache=True, error_model="numpy")
-def advance(n_owned, sums, f, loads, mat, eps_soft, box, par):
-    """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
-    with a non-finite pressure or velocity or outside `box` (xmin, ymin, xmax, ymax), or -1.
+kick = make_kick(2)
+kick_3d = make_kick(3)
 
-    f: `bundles.UpdateFields` (owned rows); loads: `bundles.SurfaceLoads`; par:
-    `bundles.StepParams`, whose members are named below.
 
-    mat: the material table (n_materials, MAT_COLUMNS), row int(material[i]) for particle
-    i: Lame constants lambda, mu (Pa), rho_s, k_sat and c_k of Eq. (4), the porosity floor
-    n_min (0: none), the Drucker-Prager flag and parameters (issue 16);
-    bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
-    (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
-    1 explicit Eq. (25), 2 TPI Eq. (38), with the storage of Eq. (47) below zero when
-    beta > 0 (beta: Eq. 47; `tpi_pressure`; alpha of Eq. 39 is in the sums), 3 projection (p already
-    solved); p = 0 is imposed where drained_from <= t.
-    plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
-    whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
-    psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
-    the softening of phi and c, Eq. (17)-(18), takes eps_soft[i]: eps_p itself (the local
-    law) or the regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17); the
-    decay of psi, Eq. (19), the particle's own eps_p (the approach to the critical state
-    is the particle's own: with the regularised strain a row sliding on a wall, twice as
-    strained as its support's average, kept eps_hat = 0, psi = psi_0 and contracted to
-    n = 0, README issue 17); plastic_work
-    accumulates the dissipated work sigma : d eps_p (J/m^3, `plasticity.dp_return`).
-    ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
-    hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
-    kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
-    gradient of the new v; only the position moves with it here.
-    """
-    x, u, v, stress, p, p_prev = f.x, f.u, f.v, f.stress, f.p, f.p_prev
-    poro, poro0, vol, vol0, rho, perm = f.poro, f.poro0, f.vol, f.vol0, f.rho, f.perm
-    acc, drained_from, material = f.acc, f.drained_from, f.material
-    eps_p, plastic_work = f.eps_p, f.plastic_work
-    load_index, traction, load_value = loads.load_index, loads.traction, loads.load_value
-    dt, t, bulk_water, gamma_l, rho_l = par.dt, par.t, par.bulk_water, par.gamma_l, par.rho_l
-    b0, b1, damping, scheme, beta = par.b0, par.b1, par.damping, par.scheme, par.beta
-    acc_term, correct_strain, plastic = par.acc_term, par.correct_strain, par.plastic
-    ponding, kicked = par.ponding, par.kicked
-    bad = -1
-    inv_g = rho_l / gamma_l
-    for i in range(n_owned):
-        s = sums[i]
-        row = mat[int(material[i])]
-        lam = row[MAT_LAM]
-        shear = row[MAT_SHEAR]
-        m00, m01, m10, m11 = _inverse_moment(s)
-        # velocity gradient L[a, b] = dv_a/dx_b = G[a, n] Minv[n, b]   (Eq. 22): the
-        # stretching (diagonal) from Gv + Gs, the shear from Gv (interactions.py: a fixed
-        # wall resists shear, not stretching along itself)
-        gs00 = s[GV_XX] + s[GS_XX]
-        gs11 = s[GV_YY] + s[GS_YY]
-        l00 = gs00 * m00 + (s[GV_XY] + s[GS_XY]) * m10
-        l01 = s[GV_XX] * m01 + s[GV_XY] * m11
-        l10 = s[GV_YX] * m00 + s[GV_YY] * m10
-        l11 = (s[GV_YX] + s[GS_YX]) * m01 + gs11 * m11
-        div_v = l00 + l11
-        if not correct_strain:
-            # shear rate and spin from the plain kernel gradient (Bui et al. 2008): the
-            # corrected one excites a growing zig-zag mode at free surfaces (README). The
-            # normal rates keep the correction, so that the skeleton changes volume as the
-            # pore water of Eq. (24)-(25) sees it: where the support is cut (free
-            # surfaces, corners) the plain div v is about half the corrected one, the two
-            # phases disagreed on how much the soil expanded, and suction grew at sheared
-            # corners (issue 13; README)
-            l01 = s[GV_XY]
-            l10 = s[GV_YX]
-            if scheme == SCHEME_NONE:
-                # dry: no pore water to agree with, and the corrected normal rates let a
-                # block that lands on a fixed floor eject free-surface particles
-                # (tests/test_parallel_runs.py's falling block), as the README's surface
-                # mode: the plain gradient throughout, as Bui et al. (2008)
-                l00 = gs00
-                l11 = gs11
+def make_advance(dim: int):
+    """`advance` in `dim` = 2 or 3 dimensions (one source, `dims.py`); 2D the plane-strain
+    step as before, the same bits."""
+    lay = sum_layout(dim)
+    cm, cgv, cgs, cgn, cgp, cq = lay.M, lay.GV, lay.GS, lay.GN, lay.GP, lay.Q
+    ca, cap_, capsi, cga, cdv = lay.SUM_A, lay.SUM_AP, lay.SUM_APSI, lay.GA, lay.DVDT
+    surface_trace = 0.75 * dim  # the trace of M below which a particle is on the surface
 
-        # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
-        e01 = 0.5 * (l01 + l10)
-        w = 0.5 * (l01 - l10)
-        sxx = stress[i, 0]
-        syy = stress[i, 1]
-        sxy = stress[i, 3]
-        stress[i, 0] = sxx + dt * ((lam + 2.0 * shear) * l00 + lam * l11 + 2.0 * w * sxy)
-        stress[i, 1] = syy + dt * (lam * l00 + (lam + 2.0 * shear) * l11 - 2.0 * w * sxy)
-        stress[i, 2] += dt * lam * (l00 + l11)
-        stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
-        if plastic and row[MAT_PLASTIC] > 0.0:
-            d = MAT_DP
-            r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3], eps_soft[i],
-                          lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1], row[d + 2],
-                          row[d + 3], row[d + 4], row[d + 5], row[d + 6], row[MAT_TENSION],
-                          eps_p[i])
-            stress[i, 0] = r[0]
-            stress[i, 1] = r[1]
-            stress[i, 2] = r[2]
-            stress[i, 3] = r[3]
-            eps_p[i] += r[5]
-            plastic_work[i] += r[6]
+    @nb.njit(cache=True, error_model="numpy")
+    def advance(n_owned, sums, f, loads, mat, eps_soft, box, par):
+        """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
+        with a non-finite pressure or velocity or outside `box` (xmin, ymin, [zmin,] xmax,
+        ymax[, zmax]), or -1. In 3D the same steps with the 3x3 correction and the full
+        spin (`kinematics.py`) and `plasticity.dp_return_3d`.
 
-        if scheme != SCHEME_NONE:
-            # porosity rate, Eq. (24): trace(Gn Minv)
-            dn = s[GN_XX] * m00 + s[GN_XY] * m10 + s[GN_YX] * m01 + s[GN_YY] * m11
-            # corrected pressure gradient (Eq. 22) and the Eq. (23) correction term
-            gp0 = s[GP_X] * m00 + s[GP_Y] * m10
-            gp1 = s[GP_X] * m01 + s[GP_Y] * m11
-            q0 = s[Q_X]
-            q1 = s[Q_Y]
-            e_i = perm[i] * (gp0 * q0 + gp1 * q1)
-            # elevation head: div(k grad psi), psi = -rho_l b.x, with the same correction
-            head = s[SUM_APSI] + perm[i] * rho_l * (b0 * q0 + b1 * q1)
-            div_ka = 0.0
-            if acc_term:
-                div_ka = s[GA_XX] * m00 + s[GA_XY] * m10 + s[GA_YX] * m01 + s[GA_YY] * m11
-            if drained_from[i] <= t:
-                p[i] = 0.0
-                p_prev[i] = 0.0
-            elif scheme == SCHEME_EXPLICIT:
-                lap = s[SUM_AP] - p[i] * s[SUM_A] - e_i + head  # div(k grad(p + psi)), Eq. (23)
-                rate = bulk_water / poro[i] * (lap / gamma_l - div_v + inv_g * div_ka)
-                p_prev[i] = p[i]
-                p[i] += dt * rate
-            elif scheme == SCHEME_PROJECTION:
-                pass  # p and p_prev were set by the pressure solve
-            elif s[SUM_A] > 0.0:
-                # TPI, Eq. (38) with B of Eq. (36); s[SUM_AP] holds sum A_ij p_j^(t+alpha)
-                b_i = -gamma_l * div_v + head + rho_l * div_ka - e_i
-                p_new = tpi_pressure(b_i, s[SUM_A], s[SUM_AP], p[i], beta, dt)
-                p_prev[i] = p[i]
-                p[i] = p_new
-            if ponding > 0 and s[M_XX] + s[M_YY] < 1.5 and (p[i] > 0.0 or ponding == 2):
-                # a free-surface particle (kernel support < 3/4 full: trace of the moment
-                # matrix of Eq. 22 below 1.5 of 2) cannot hold positive pore pressure, nor
-                # any when drained
-                p[i] = 0.0
-                if p_prev[i] > 0.0 or ponding == 2:
+        f: `bundles.UpdateFields` (owned rows); loads: `bundles.SurfaceLoads`; par:
+        `bundles.StepParams`, whose members are named below.
+
+        mat: the material table (n_materials, MAT_COLUMNS), row int(material[i]) for particle
+        i: Lame constants lambda, mu (Pa), rho_s, k_sat and c_k of Eq. (4), the porosity floor
+        n_min (0: none), the Drucker-Prager flag and parameters (issue 16);
+        bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
+        (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
+        1 explicit Eq. (25), 2 TPI Eq. (38), with the storage of Eq. (47) below zero when
+        beta > 0 (beta: Eq. 47; `tpi_pressure`; alpha of Eq. 39 is in the sums),
+        3 projection (p already solved); p = 0 is imposed where drained_from <= t.
+        plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
+        whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
+        psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
+        the softening of phi and c, Eq. (17)-(18), takes eps_soft[i]: eps_p itself (the local
+        law) or the regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17); the
+        decay of psi, Eq. (19), the particle's own eps_p (the approach to the critical state
+        is the particle's own: with the regularised strain a row sliding on a wall, twice as
+        strained as its support's average, kept eps_hat = 0, psi = psi_0 and contracted to
+        n = 0, README issue 17); plastic_work
+        accumulates the dissipated work sigma : d eps_p (J/m^3, `plasticity.dp_return`).
+        ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
+        hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
+        kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
+        gradient of the new v; only the position moves with it here.
+        """
+        x, u, v, stress, p, p_prev = f.x, f.u, f.v, f.stress, f.p, f.p_prev
+        poro, poro0, vol, vol0, rho, perm = f.poro, f.poro0, f.vol, f.vol0, f.rho, f.perm
+        acc, drained_from, material = f.acc, f.drained_from, f.material
+        eps_p, plastic_work = f.eps_p, f.plastic_work
+        load_index, traction, load_value = loads.load_index, loads.traction, loads.load_value
+        dt, t, bulk_water, gamma_l, rho_l = par.dt, par.t, par.bulk_water, par.gamma_l, par.rho_l
+        b0, b1, damping, scheme, beta = par.b0, par.b1, par.damping, par.scheme, par.beta
+        b2 = par.b2
+        acc_term, correct_strain, plastic = par.acc_term, par.correct_strain, par.plastic
+        ponding, kicked = par.ponding, par.kicked
+        bad = -1
+        inv_g = rho_l / gamma_l
+        for i in range(n_owned):
+            s = sums[i]
+            row = mat[int(material[i])]
+            lam = row[MAT_LAM]
+            shear = row[MAT_SHEAR]
+            if dim == 2:
+                m00, m01, m10, m11 = _inverse_moment(s)
+                # velocity gradient L[a, b] = dv_a/dx_b = G[a, n] Minv[n, b]   (Eq. 22): the
+                # stretching (diagonal) from Gv + Gs, the shear from Gv (interactions.py: a fixed
+                # wall resists shear, not stretching along itself)
+                gs00 = s[GV_XX] + s[GS_XX]
+                gs11 = s[GV_YY] + s[GS_YY]
+                l00 = gs00 * m00 + (s[GV_XY] + s[GS_XY]) * m10
+                l01 = s[GV_XX] * m01 + s[GV_XY] * m11
+                l10 = s[GV_YX] * m00 + s[GV_YY] * m10
+                l11 = (s[GV_YX] + s[GS_YX]) * m01 + gs11 * m11
+                div_v = l00 + l11
+                if not correct_strain:
+                    # shear rate and spin from the plain kernel gradient (Bui et al. 2008): the
+                    # corrected one excites a growing zig-zag mode at free surfaces (README). The
+                    # normal rates keep the correction, so that the skeleton changes volume as the
+                    # pore water of Eq. (24)-(25) sees it: where the support is cut (free
+                    # surfaces, corners) the plain div v is about half the corrected one, the two
+                    # phases disagreed on how much the soil expanded, and suction grew at sheared
+                    # corners (issue 13; README)
+                    l01 = s[GV_XY]
+                    l10 = s[GV_YX]
+                    if scheme == SCHEME_NONE:
+                        # dry: no pore water to agree with, and the corrected normal rates let a
+                        # block that lands on a fixed floor eject free-surface particles
+                        # (tests/test_parallel_runs.py's falling block), as the README's surface
+                        # mode: the plain gradient throughout, as Bui et al. (2008)
+                        l00 = gs00
+                        l11 = gs11
+
+                # effective stress: linear elastic, plane strain, Jaumann rate (Eq. 11)
+                e01 = 0.5 * (l01 + l10)
+                w = 0.5 * (l01 - l10)
+                sxx = stress[i, 0]
+                syy = stress[i, 1]
+                sxy = stress[i, 3]
+                stress[i, 0] = sxx + dt * ((lam + 2.0 * shear) * l00 + lam * l11 + 2.0 * w * sxy)
+                stress[i, 1] = syy + dt * (lam * l00 + (lam + 2.0 * shear) * l11 - 2.0 * w * sxy)
+                stress[i, 2] += dt * lam * (l00 + l11)
+                stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
+                if plastic and row[MAT_PLASTIC] > 0.0:
+                    d = MAT_DP
+                    r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3],
+                                  eps_soft[i], lam + 2.0 * shear / 3.0, shear, row[d],
+                                  row[d + 1], row[d + 2], row[d + 3], row[d + 4], row[d + 5],
+                                  row[d + 6], row[MAT_TENSION],
+                                  eps_p[i])
+                    stress[i, 0] = r[0]
+                    stress[i, 1] = r[1]
+                    stress[i, 2] = r[2]
+                    stress[i, 3] = r[3]
+                    eps_p[i] += r[5]
+                    plastic_work[i] += r[6]
+            else:
+                mi = inverse_moment_3d(s, cm)
+                lg = velocity_gradient_3d(s, cgv, cgs, mi, correct_strain,
+                                          scheme == SCHEME_NONE)
+                div_v = lg[0] + lg[4] + lg[8]
+                jaumann_elastic_3d(stress, i, lg, lam, shear, dt)
+                if plastic and row[MAT_PLASTIC] > 0.0:
+                    d = MAT_DP
+                    r3 = dp_return_3d(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3],
+                                      stress[i, 4], stress[i, 5], eps_soft[i],
+                                      lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1],
+                                      row[d + 2], row[d + 3], row[d + 4], row[d + 5],
+                                      row[d + 6], row[MAT_TENSION], eps_p[i])
+                    for c in range(6):
+                        stress[i, c] = r3[c]
+                    eps_p[i] += r3[7]
+                    plastic_work[i] += r3[8]
+
+            if scheme != SCHEME_NONE:
+                if dim == 2:
+                    # porosity rate, Eq. (24): trace(Gn Minv)
+                    dn = s[GN_XX] * m00 + s[GN_XY] * m10 + s[GN_YX] * m01 + s[GN_YY] * m11
+                    # corrected pressure gradient (Eq. 22) and the Eq. (23) correction term
+                    gp0 = s[GP_X] * m00 + s[GP_Y] * m10
+                    gp1 = s[GP_X] * m01 + s[GP_Y] * m11
+                    q0 = s[Q_X]
+                    q1 = s[Q_Y]
+                    e_i = perm[i] * (gp0 * q0 + gp1 * q1)
+                    # elevation head: div(k grad psi), psi = -rho_l b.x, with the same correction
+                    head = s[SUM_APSI] + perm[i] * rho_l * (b0 * q0 + b1 * q1)
+                    div_ka = 0.0
+                    if acc_term:
+                        div_ka = s[GA_XX] * m00 + s[GA_XY] * m10 + s[GA_YX] * m01 + s[GA_YY] * m11
+                else:
+                    dn = _trace_3d(s, cgn, mi)
+                    gp0 = s[cgp] * mi[0] + s[cgp + 1] * mi[3] + s[cgp + 2] * mi[6]
+                    gp1 = s[cgp] * mi[1] + s[cgp + 1] * mi[4] + s[cgp + 2] * mi[7]
+                    gp2 = s[cgp] * mi[2] + s[cgp + 1] * mi[5] + s[cgp + 2] * mi[8]
+                    q0, q1, q2 = s[cq], s[cq + 1], s[cq + 2]
+                    e_i = perm[i] * (gp0 * q0 + gp1 * q1 + gp2 * q2)
+                    head = s[capsi] + perm[i] * rho_l * (b0 * q0 + b1 * q1 + b2 * q2)
+                    div_ka = _trace_3d(s, cga, mi) if acc_term else 0.0
+                if drained_from[i] <= t:
+                    p[i] = 0.0
                     p_prev[i] = 0.0
-            n_new = poro[i] + dt * dn
-            if n_new < row[MAT_N_MIN]:
-                # Eq. (24) alone lets a free-surface particle (p imposed, so no pressure
-                # feedback) drift to n <= 0, where K_l / n of Eq. (25) changes sign
-                n_new = row[MAT_N_MIN]
-            set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, row[MAT_RHO_S], rho_l,
-                         row[MAT_K], row[MAT_C_K])
+                elif scheme == SCHEME_EXPLICIT:
+                    lap = s[cap_] - p[i] * s[ca] - e_i + head  # div(k grad(p + psi)), Eq. (23)
+                    rate = bulk_water / poro[i] * (lap / gamma_l - div_v + inv_g * div_ka)
+                    p_prev[i] = p[i]
+                    p[i] += dt * rate
+                elif scheme == SCHEME_PROJECTION:
+                    pass  # p and p_prev were set by the pressure solve
+                elif s[ca] > 0.0:
+                    # TPI, Eq. (38) with B of Eq. (36); s[SUM_AP] holds sum A_ij p_j^(t+alpha)
+                    b_i = -gamma_l * div_v + head + rho_l * div_ka - e_i
+                    p_new = tpi_pressure(b_i, s[ca], s[cap_], p[i], beta, dt)
+                    p_prev[i] = p[i]
+                    p[i] = p_new
+                trace_m = s[M_XX] + s[M_YY] if dim == 2 else s[cm] + s[cm + 4] + s[cm + 8]
+                if ponding > 0 and trace_m < surface_trace and (p[i] > 0.0 or ponding == 2):
+                    # a free-surface particle (kernel support < 3/4 full: trace of the moment
+                    # matrix of Eq. 22 below 1.5 of 2, 2.25 of 3 in 3D) cannot hold positive
+                    # pore pressure, nor any when drained
+                    p[i] = 0.0
+                    if p_prev[i] > 0.0 or ponding == 2:
+                        p_prev[i] = 0.0
+                n_new = poro[i] + dt * dn
+                if n_new < row[MAT_N_MIN]:
+                    # Eq. (24) alone lets a free-surface particle (p imposed, so no pressure
+                    # feedback) drift to n <= 0, where K_l / n of Eq. (25) changes sign
+                    n_new = row[MAT_N_MIN]
+                set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, row[MAT_RHO_S], rho_l,
+                             row[MAT_K], row[MAT_C_K])
 
-        if not kicked:
-            _momentum(i, s, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
-                      damping, dt)
-        x[i, 0] += dt * v[i, 0]
-        x[i, 1] += dt * v[i, 1]
-        u[i, 0] += dt * v[i, 0]
-        u[i, 1] += dt * v[i, 1]
-        if bad < 0:
-            if not (abs(p[i]) < 1e300 and abs(v[i, 0]) < 1e300 and abs(v[i, 1]) < 1e300
-                    and abs(stress[i, 0]) < 1e300 and abs(stress[i, 1]) < 1e300
-                    and abs(stress[i, 3]) < 1e300):
-                bad = i
-            elif not (box[0] <= x[i, 0] <= box[2] and box[1] <= x[i, 1] <= box[3]):
-                bad = i
-            elif scheme != SCHEME_NONE and not (0.0 < poro[i] < 1.0):
-                bad = i  # Eq. (24) left (0, 1): K_l / n or the volume changed sign
-    return bad
+            if not kicked:
+                _momentum(i, s, cdv, v, acc, rho, vol, load_index, traction, load_value, b0,
+                          b1, b2, damping, dt, dim)
+            for d in range(dim):
+                x[i, d] += dt * v[i, d]
+                u[i, d] += dt * v[i, d]
+            if bad < 0:
+                if not (abs(p[i]) < 1e300 and abs(v[i, 0]) < 1e300 and abs(v[i, 1]) < 1e300
+                        and abs(stress[i, 0]) < 1e300 and abs(stress[i, 1]) < 1e300
+                        and abs(stress[i, 3]) < 1e300):
+                    bad = i
+                elif dim == 2 and not (box[0] <= x[i, 0] <= box[2]
+                                       and box[1] <= x[i, 1] <= box[3]):
+                    bad = i
+                elif dim == 3 and not (abs(v[i, 2]) < 1e300 and abs(stress[i, 2]) < 1e300
+                                       and abs(stress[i, 4]) < 1e300
+                                       and abs(stress[i, 5]) < 1e300
+                                       and box[0] <= x[i, 0] <= box[3]
+                                       and box[1] <= x[i, 1] <= box[4]
+                                       and box[2] <= x[i, 2] <= box[5]):
+                    bad = i
+                elif scheme != SCHEME_NONE and not (0.0 < poro[i] < 1.0):
+                    bad = i  # Eq. (24) left (0, 1): K_l / n or the volume changed sign
+        return bad
+
+    return advance
+
+
+advance = make_advance(2)
+advance_3d = make_advance(3)
+
+
+@nb.njit(cache=True, inline="always")
+def _trace_3d(s, c, mi):
+    """trace(G Minv) of the 3x3 group G = s[c:c + 9] (row-major)."""
+    acc = 0.0
+    for a in range(3):
+        for n in range(3):
+            acc += s[c + 3 * a + n] * mi[3 * n + a]
+    return acc
