@@ -344,3 +344,45 @@ def test_a_3d_step_of_a_uniformly_strained_block():
     assert np.allclose(upd.stress[inner][:, voigt], dt * rate, rtol=1e-9)
     assert np.allclose(v[inner], v0[inner] + dt * np.array([0.0, 0.0, -9.81]), rtol=1e-12)
     assert np.allclose(x, x0 + dt * v, rtol=0.0, atol=1e-15)
+
+
+def test_projection_kernels_in_3d():
+    """The projection's pair weights (2F_ab (k_scale kbar + rho_scale / rhobar)) against
+    numpy, and its right-hand side for a uniform p and a linear velocity: -V_i div v
+    inside (the Darcy term of a uniform pressure vanishes), the storage n / (K_l dt)."""
+    from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
+    from psph.kernels.interactions import pair_sums_3d
+    from psph.kernels.laplacian import pair_weights_3d
+    from psph.kernels.projection import projection_rhs_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    dx, h, m = 0.1, 0.12, 8
+    x = lattice_3d(m, dx, 0.15, seed=9)
+    n = len(x)
+    rng = np.random.default_rng(4)
+    grad_v = np.array([[0.7, 0.2, -0.3], [0.4, -0.5, 0.1], [0.0, 0.3, 0.9]])
+    v = x @ grad_v.T
+    perm, rho = rng.uniform(1e-4, 2e-4, n), rng.uniform(1800.0, 2000.0, n)
+    p = np.full(n, 5.0e3)
+    z = np.zeros
+    fields = PairFields(x, v, v.copy(), z((n, 6)), p, p.copy(), np.full(n, 0.4),
+                        np.full(n, dx ** 3), rho, perm, z((n, 3)), z((n, 6)))
+    sums = z((n, sum_layout(3).NSUMS))
+    rec = PairRecord(z((64 * n, 2), np.int64), z((64 * n, 3)))
+    m_pairs = pair_sums_3d(n, n, n, fields, Cells(*cell_lists(x, h)),
+                           PairParams(h, record=True).typed(), sums, rec)
+    pairs, g = rec.pairs[:m_pairs], rec.pair_g[:m_pairs]
+    w = z(m_pairs)
+    pair_weights_3d(m_pairs, pairs, g, x, perm, rho, 2.0, 3.0e-6, w)
+    a, b = pairs[:, 0], pairs[:, 1]
+    d = x[b] - x[a]
+    f2 = 2.0 * np.sum(g * d, axis=1) / np.sum(d * d, axis=1)
+    assert np.allclose(w, f2 * (2.0 * 0.5 * (perm[a] + perm[b]) + 3.0e-6 * 2.0 / (rho[a] + rho[b])),
+                       rtol=1e-12)
+    storage, rhs = z(n), z(n)
+    projection_rhs_3d(n, sums, p, perm, fields.vol, fields.poro, 1000.0, 0.0, 0.0, 9810.0,
+                      1.0e9, 1e-4, storage, rhs, 0.0)
+    inner = np.all((x > 2.5 * h) & (x < m * dx - 2.5 * h), axis=1)
+    assert inner.sum() > 0
+    assert np.allclose(storage, 0.4 / (1.0e9 * 1e-4))
+    assert np.allclose(rhs[inner], -dx ** 3 * np.trace(grad_v), rtol=1e-9)

@@ -363,17 +363,19 @@ def symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, q, out):
     """out_i = sum_j V_j (q_i + q_j) grad_i W_ij of owned particles over the pairs
     `pair_sums` recorded, in their visiting order (partition-independent): the
     pair-symmetric gradient of Eq. (26) for a scalar q (the projection's pressure
-    correction), and with q = 1/2 the concentration gradient of particle shifting."""
+    correction), and with q = 1/2 the concentration gradient of particle shifting; 2D or
+    3D by pair_g."""
+    dim = pair_g.shape[1]
     for i in range(n_owned):
-        out[i, 0] = 0.0
-        out[i, 1] = 0.0
+        for d in range(dim):
+            out[i, d] = 0.0
     for k in range(n_pairs):
         a = pairs[k, 0]
         b = pairs[k, 1]
         f = q[a] + q[b]
         if a < n_owned:
-            out[a, 0] += vol[b] * f * pair_g[k, 0]
-            out[a, 1] += vol[b] * f * pair_g[k, 1]
+            for d in range(dim):
+                out[a, d] += vol[b] * f * pair_g[k, d]
         if b < n_owned:
-            out[b, 0] -= vol[a] * f * pair_g[k, 0]
-            out[b, 1] -= vol[a] * f * pair_g[k, 1]
+            for d in range(dim):
+                out[b, d] -= vol[a] * f * pair_g[k, d]

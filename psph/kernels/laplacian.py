@@ -18,14 +18,17 @@ The sums follow the recorded pair order, the order `pair_sums` visits, so they a
 partition-independent as its sums (1 vs 2 ranks bitwise).
 """
 
+import math
+
 import numba as nb
 import numpy as np
 
-from psph.kernels.spline import dw_cubic
+from psph.kernels.spline import dw_cubic, dw_cubic_dim
 
 
-def lattice_moment(dx: float, h: float) -> float:
-    """m0 = sum_j V_j (-W'(r_ij) / r_ij) y_ij^2 over a full square lattice of spacing dx:
+def lattice_moment(dx: float, h: float, dim: int = 2) -> float:
+    """m0 = sum_j V_j (-W'(r_ij) / r_ij) y_ij^2 over a full square (cubic, dim = 3)
+    lattice of spacing dx:
     the moment matrix M of Eq. (22) of an interior particle of the initial lattice is m0 I
     (0.991 at h = 1.2 dx). Eq. (23) takes F~ with the normalised gradient M^-1 grad W; with
     the plain gradient the Laplacian of a quadratic comes out m0 times too small, and the
@@ -35,28 +38,51 @@ def lattice_moment(dx: float, h: float) -> float:
     correction are divided by m0 (`Simulation._interactions`, `PressureSolve`)."""
     n = int(np.ceil(2.0 * h / dx))
     m = 0.0
+    if dim == 2:
+        for i in range(-n, n + 1):
+            for j in range(-n, n + 1):
+                r = dx * np.hypot(i, j)
+                if 0.0 < r < 2.0 * h:
+                    m += dx * dx * (-dw_cubic(r, h) / r) * (j * dx) ** 2
+        return m
     for i in range(-n, n + 1):
         for j in range(-n, n + 1):
-            r = dx * np.hypot(i, j)
-            if 0.0 < r < 2.0 * h:
-                m += dx * dx * (-dw_cubic(r, h) / r) * (j * dx) ** 2
+            for k in range(-n, n + 1):
+                r = dx * math.sqrt(i * i + j * j + k * k)
+                if 0.0 < r < 2.0 * h:
+                    m += dx ** 3 * (-dw_cubic_dim(r, h, 3) / r) * (j * dx) ** 2
     return m
 
 
-@nb.njit(cache=True)
-def pair_weights(n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray, x: np.ndarray,
-                 perm: np.ndarray, rho: np.ndarray, k_scale: float, rho_scale: float,
-                 out: np.ndarray) -> None:
-    """out[k] = 2F_ab (k_scale kbar_ab + rho_scale / rhobar_ab) for recorded pair k = (a, b),
-    with 2F_ab = 2 r_ba . grad_a W_ab / |r_ba|^2 (> 0), kbar, rhobar arithmetic means."""
-    for k in range(n_pairs):
-        a = pairs[k, 0]
-        b = pairs[k, 1]
-        dx0 = x[b, 0] - x[a, 0]
-        dx1 = x[b, 1] - x[a, 1]
-        f2 = 2.0 * (pair_g[k, 0] * dx0 + pair_g[k, 1] * dx1) / (dx0 * dx0 + dx1 * dx1)
-        out[k] = f2 * (k_scale * 0.5 * (perm[a] + perm[b])
-                       + rho_scale * 2.0 / (rho[a] + rho[b]))
+def make_pair_weights(dim: int):
+    """`pair_weights` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
+
+    @nb.njit(cache=True)
+    def pair_weights(n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray, x: np.ndarray,
+                     perm: np.ndarray, rho: np.ndarray, k_scale: float, rho_scale: float,
+                     out: np.ndarray) -> None:
+        """out[k] = 2F_ab (k_scale kbar_ab + rho_scale / rhobar_ab) for recorded pair
+        k = (a, b), with 2F_ab = 2 r_ba . grad_a W_ab / |r_ba|^2 (> 0), kbar, rhobar
+        arithmetic means."""
+        for k in range(n_pairs):
+            a = pairs[k, 0]
+            b = pairs[k, 1]
+            dx0 = x[b, 0] - x[a, 0]
+            dx1 = x[b, 1] - x[a, 1]
+            if dim == 2:
+                f2 = 2.0 * (pair_g[k, 0] * dx0 + pair_g[k, 1] * dx1) / (dx0 * dx0 + dx1 * dx1)
+            else:
+                dx2 = x[b, 2] - x[a, 2]
+                f2 = 2.0 * (pair_g[k, 0] * dx0 + pair_g[k, 1] * dx1 + pair_g[k, 2] * dx2) / (
+                    dx0 * dx0 + dx1 * dx1 + dx2 * dx2)
+            out[k] = f2 * (k_scale * 0.5 * (perm[a] + perm[b])
+                           + rho_scale * 2.0 / (rho[a] + rho[b]))
+
+    return pair_weights
+
+
+pair_weights = make_pair_weights(2)
+pair_weights_3d = make_pair_weights(3)
 
 
 @nb.njit(cache=True)

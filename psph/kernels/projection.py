@@ -23,6 +23,7 @@ import numba as nb
 import numpy as np
 
 from psph.kernels.interactions import symmetric_gradient_sums
+from psph.kernels.kinematics import inverse_moment_3d
 from psph.kernels.sum_columns import (
     GP_X,
     GP_Y,
@@ -38,45 +39,74 @@ from psph.kernels.sum_columns import (
     M_YY,
     Q_X,
     Q_Y,
-    SUM_A,
-    SUM_AP,
     SUM_APSI,
+    sum_layout,
 )
 from psph.kernels.update import _inverse_moment
 
+NSUMS_3D = sum_layout(3).NSUMS
 
-@nb.njit(cache=True, error_model="numpy")
-def projection_rhs(n_owned: int, sums: np.ndarray, p: np.ndarray, perm: np.ndarray,
-                   vol: np.ndarray, poro: np.ndarray, rho_l: float, b0: float, b1: float,
-                   gamma_l: float, bulk_water: float, dt: float, storage: np.ndarray,
-                   rhs: np.ndarray) -> None:
-    """storage_i = n_i / (K_l dt) and rhs_i = V_i (lap_i / gamma_l - div v*_i) with lap the
-    corrected Darcy term of Eq. (23) at p^n (as in explicit Eq. 25) and div v* from the
-    velocity sums (Gv + Gs with M^-1, Eq. 22) of the kicked velocity (symplectic step) or
-    of v^n, the step's sweep (the one-sweep step)."""
-    for i in range(n_owned):
-        s = sums[i]
-        m00, m01, m10, m11 = _inverse_moment(s)
-        div_v = ((s[GV_XX] + s[GS_XX]) * m00 + (s[GV_XY] + s[GS_XY]) * m10
-                 + (s[GV_YX] + s[GS_YX]) * m01 + (s[GV_YY] + s[GS_YY]) * m11)
-        gp0 = s[GP_X] * m00 + s[GP_Y] * m10
-        gp1 = s[GP_X] * m01 + s[GP_Y] * m11
-        e_i = perm[i] * (gp0 * s[Q_X] + gp1 * s[Q_Y])
-        head = s[SUM_APSI] + perm[i] * rho_l * (b0 * s[Q_X] + b1 * s[Q_Y])
-        lap = s[SUM_AP] - p[i] * s[SUM_A] - e_i + head
-        storage[i] = poro[i] / (bulk_water * dt)
-        rhs[i] = vol[i] * (lap / gamma_l - div_v)
+
+def make_projection_rhs(dim: int):
+    """`projection_rhs` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
+    lay = sum_layout(dim)
+    cm, cgv, cgs, cgp, cq = lay.M, lay.GV, lay.GS, lay.GP, lay.Q
+    ca, cap_, capsi = lay.SUM_A, lay.SUM_AP, lay.SUM_APSI
+
+    @nb.njit(cache=True, error_model="numpy")
+    def projection_rhs(n_owned: int, sums: np.ndarray, p: np.ndarray, perm: np.ndarray,
+                       vol: np.ndarray, poro: np.ndarray, rho_l: float, b0: float,
+                       b1: float, gamma_l: float, bulk_water: float, dt: float,
+                       storage: np.ndarray, rhs: np.ndarray, b2: float = 0.0) -> None:
+        """storage_i = n_i / (K_l dt) and rhs_i = V_i (lap_i / gamma_l - div v*_i) with lap
+        the corrected Darcy term of Eq. (23) at p^n (as in explicit Eq. 25) and div v* from
+        the velocity sums (Gv + Gs with M^-1, Eq. 22) of the kicked velocity (symplectic
+        step) or of v^n, the step's sweep (the one-sweep step)."""
+        for i in range(n_owned):
+            s = sums[i]
+            if dim == 2:
+                m00, m01, m10, m11 = _inverse_moment(s)
+                div_v = ((s[GV_XX] + s[GS_XX]) * m00 + (s[GV_XY] + s[GS_XY]) * m10
+                         + (s[GV_YX] + s[GS_YX]) * m01 + (s[GV_YY] + s[GS_YY]) * m11)
+                gp0 = s[GP_X] * m00 + s[GP_Y] * m10
+                gp1 = s[GP_X] * m01 + s[GP_Y] * m11
+                e_i = perm[i] * (gp0 * s[Q_X] + gp1 * s[Q_Y])
+                head = s[SUM_APSI] + perm[i] * rho_l * (b0 * s[Q_X] + b1 * s[Q_Y])
+            else:
+                mi = inverse_moment_3d(s, cm)
+                div_v = 0.0
+                for a in range(3):
+                    for n in range(3):
+                        div_v += (s[cgv + 3 * a + n] + s[cgs + 3 * a + n]) * mi[3 * n + a]
+                e_i = 0.0
+                for m in range(3):
+                    gpm = s[cgp] * mi[m] + s[cgp + 1] * mi[3 + m] + s[cgp + 2] * mi[6 + m]
+                    e_i += gpm * s[cq + m]
+                e_i *= perm[i]
+                head = s[capsi] + perm[i] * rho_l * (b0 * s[cq] + b1 * s[cq + 1]
+                                                     + b2 * s[cq + 2])
+            lap = s[cap_] - p[i] * s[ca] - e_i + head
+            storage[i] = poro[i] / (bulk_water * dt)
+            rhs[i] = vol[i] * (lap / gamma_l - div_v)
+
+    return projection_rhs
+
+
+projection_rhs = make_projection_rhs(2)
+projection_rhs_3d = make_projection_rhs(3)
 
 
 @nb.njit(cache=True)
 def imposed_increments(n_owned: int, sums: np.ndarray, drained_from: np.ndarray, t: float,
                        drained_surface: bool, p: np.ndarray, out: np.ndarray) -> None:
     """out[i] = (1, -p_i) where p^(n+1) = 0 is imposed (drained from time t on, or a
-    free-surface particle when the surface is drained: trace of M below 1.5 of 2, as in
-    `advance`), else (0, 0)."""
+    free-surface particle when the surface is drained: trace of M below 1.5 of 2, 2.25
+    of 3 in 3D (sums of the 3D layout, 57 columns), as in `advance`), else (0, 0)."""
+    three = sums.shape[1] == NSUMS_3D
     for i in range(n_owned):
         s = sums[i]
-        if drained_from[i] <= t or (drained_surface and s[M_XX] + s[M_YY] < 1.5):
+        trace = s[0] + s[4] + s[8] if three else s[M_XX] + s[M_YY]
+        if drained_from[i] <= t or (drained_surface and trace < (2.25 if three else 1.5)):
             out[i, 0] = 1.0
             out[i, 1] = -p[i]
         else:
@@ -100,12 +130,10 @@ def pressure_correction(n_owned: int, n_pairs: int, pairs: np.ndarray, pair_g: n
                         norm: float, dv: np.ndarray, v: np.ndarray, acc: np.ndarray) -> None:
     """v_i += dt a_i and acc_i += a_i with a_i = -norm sum_j V_j (dp_i + dp_j) grad_i W_ij /
     rho_i, the pore-pressure part of Eq. (26) for the increment, over the recorded pairs
-    (norm: 1 / the lattice moment, as the step's stress divergence)."""
+    (norm: 1 / the lattice moment, as the step's stress divergence); 2D or 3D by v."""
     symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, dp, dv)
     for i in range(n_owned):
-        a0 = -norm * dv[i, 0] / rho[i]
-        a1 = -norm * dv[i, 1] / rho[i]
-        acc[i, 0] += a0
-        acc[i, 1] += a1
-        v[i, 0] += dt * a0
-        v[i, 1] += dt * a1
+        for d in range(v.shape[1]):
+            a = -norm * dv[i, d] / rho[i]
+            acc[i, d] += a
+            v[i, d] += dt * a
