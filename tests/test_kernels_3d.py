@@ -386,3 +386,41 @@ def test_projection_kernels_in_3d():
     assert inner.sum() > 0
     assert np.allclose(storage, 0.4 / (1.0e9 * 1e-4))
     assert np.allclose(rhs[inner], -dx ** 3 * np.trace(grad_v), rtol=1e-9)
+
+
+def test_wall_ghosts_in_3d_at_a_corner():
+    """`make_ghosts` in 3D: a particle near the corner of three free-slip walls gets 7
+    ghosts (3 faces, 3 edges, 1 corner) at its mirror images, with the wall-normal
+    velocity reversed across each wall, the shear components on each wall's plane
+    reversed (twice across an edge or the corner: kept), the hydrostatic head continued
+    below the floor, and keys that differ."""
+    from psph.kernels.ghosts import make_ghosts
+
+    cap = 16
+    z = np.zeros
+    x = z((cap, 3))
+    x[0] = [0.01, 0.02, 0.03]
+    v = z((cap, 3))
+    v[0] = [1.0, 2.0, 3.0]
+    v_slip, acc = v.copy(), z((cap, 3))
+    stress = z((cap, 6))
+    stress[0] = [-1.0, -2.0, -3.0, 0.4, 0.5, 0.6]
+    p, p_prev = z(cap), z(cap)
+    p[0] = p_prev[0] = 100.0
+    poro, vol, rho, perm = (np.full(cap, c) for c in (0.4, 1e-3, 2000.0, 1e-4))
+    key, src, sign = z(cap), z(cap, np.int64), np.ones(cap)
+    axis = np.array([0, 1, 2], np.int64)
+    head_b = np.array([0.0, 0.0, -9810.0])  # rho_l b, gravity along -z
+    ng = make_ghosts(1, cap, 0.1, 1000.0, axis, z(3), np.ones(3), np.zeros(3, np.bool_),
+                     np.zeros(3, np.bool_), x, v, v_slip, stress, p, p_prev, poro, vol, rho,
+                     perm, acc, key, head_b, z(3), src, sign)
+    assert ng == 7 and np.all(src[1:8] == 0)
+    assert len(set(key[:8].tolist())) == 8
+    for g in range(1, 8):
+        flipped = np.sign(x[g]) < 0  # the walls this ghost is mirrored across
+        assert np.allclose(np.abs(x[g]), x[0])
+        assert np.allclose(v[g], np.where(flipped, -v[0], v[0]))
+        for c, (m, q) in zip((3, 4, 5), ((0, 1), (1, 2), (2, 0)), strict=True):
+            reversed_ = flipped[m] ^ flipped[q]
+            assert stress[g, c] == (-stress[0, c] if reversed_ else stress[0, c])
+        assert p[g] == pytest.approx(100.0 - 9810.0 * (x[g, 2] - x[0, 2]))

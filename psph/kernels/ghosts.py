@@ -12,7 +12,8 @@ rho_l b.(x_ghost - x_real), so that the total head p + psi of Eq. (25) is mirror
 wall is impermeable also under gravity; on a drained wall (`wall_drained`) the pore
 pressure is mirrored antisymmetrically, p_ghost = -p_real, so that p = 0 on the wall
 plane itself (issue 14, item 3; `images.py`).
-Particles near two walls of different axes also get a corner ghost mirrored across both.
+Particles near two walls of different axes also get a corner ghost mirrored across both,
+and in 3D, near three, one mirrored across all three.
 
 The wall-normal total stress sigma_nn = sigma'_nn - p (Eq. 2) of a ghost is the real
 particle's plus the weight of the soil between them, -rho_j b.(x_ghost - x_real): the
@@ -35,10 +36,11 @@ import numba as nb
 @nb.njit(cache=True)
 def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev, poro, vol,
             rho, perm, acc, key, head_b, body):
-    x[dst, 0] = x[src, 0]
-    x[dst, 1] = x[src, 1]
+    dim = x.shape[1]
+    for d in range(dim):
+        x[dst, d] = x[src, d]
     x[dst, axis] = 2.0 * pos - x[src, axis]
-    for d in range(2):
+    for d in range(dim):
         if d == axis or fixed:
             v[dst, d] = -v[src, d]
             acc[dst, d] = -acc[src, d]
@@ -49,14 +51,19 @@ def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev
     stress[dst, 0] = stress[src, 0]
     stress[dst, 1] = stress[src, 1]
     stress[dst, 2] = stress[src, 2]
-    # free slip: shear reversed, so a real-ghost pair carries no shear traction; fixed:
-    # shear kept, so the wall's shear reaction resists sliding along it
-    stress[dst, 3] = stress[src, 3] if fixed else -stress[src, 3]
+    # free slip: the shear components on the wall's plane reversed, so a real-ghost pair
+    # carries no shear traction; fixed: kept, so the wall's shear reaction resists sliding
+    # along it. 2D: xy; 3D: xy, yz, zx, those with the wall's normal axis
+    for c in range(3, stress.shape[1]):
+        on_normal = axis == c - 3 or axis == (c - 2) % 3
+        stress[dst, c] = stress[src, c] if (fixed or not on_normal) else -stress[src, c]
     if drained:
         p[dst] = -p[src]
         p_prev[dst] = -p_prev[src]
     else:
         dp = head_b[0] * (x[dst, 0] - x[src, 0]) + head_b[1] * (x[dst, 1] - x[src, 1])
+        if dim == 3:
+            dp += head_b[2] * (x[dst, 2] - x[src, 2])
         p[dst] = p[src] + dp
         p_prev[dst] = p_prev[src] + dp
     # the wall-normal total stress continued with its equilibrium gradient -rho b (module
@@ -78,7 +85,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 head_b, body, src, src_sign):
     """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
     or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
-    per wall / corner, so the neighbour order is the same on any number of ranks.
+    per wall / edge / corner, so the neighbour order is the same on any number of ranks.
     head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift (zero
     in a scene without pore pressure); body: the body force b (m/s^2), for the weight
     between a particle and its ghost in the wall-normal stress.
@@ -87,11 +94,14 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
     src: src[g] = the real row a ghost g mirrors (corner ghosts too), for fields that are
     mirrored again later (the search direction of the pressure solve), and src_sign[g]
     the sign that carries a pressure increment to it (-1 across a drained wall).
-    wall_drained[w]: the wall's pore pressure is mirrored antisymmetrically (p = 0 on it)."""
+    wall_drained[w]: the wall's pore pressure is mirrored antisymmetrically (p = 0 on it).
+    2D or 3D by x: near two walls of different axes a particle also gets the ghost
+    mirrored across both (an edge), near three (3D) the one across all three (a corner)."""
     nw = wall_axis.shape[0]
+    dim = x.shape[1]
     for j in range(n_real):
-        v_slip[j, 0] = v[j, 0]
-        v_slip[j, 1] = v[j, 1]
+        for d in range(dim):
+            v_slip[j, d] = v[j, d]
     g = n_real
     for j in range(n_real):
         for w in range(nw):
@@ -122,6 +132,22 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 src[g] = j
                 src_sign[g] = src_sign[gg] * (-1.0 if wall_drained[w2] else 1.0)
                 g += 1
+                for w3 in range(w2 + 1, nw):
+                    if wall_axis[w3] == wall_axis[w] or wall_axis[w3] == wall_axis[w2]:
+                        continue
+                    d3 = wall_sign[w3] * (x[j, wall_axis[w3]] - wall_pos[w3])
+                    if d3 < 0.0 or d3 >= reach:
+                        continue
+                    if g >= cap:
+                        return -1
+                    ge = g - 1
+                    _mirror(ge, g, wall_axis[w3], wall_pos[w3], wall_fixed[w3],
+                            wall_drained[w3], x, v, v_slip, stress, p, p_prev, poro, vol, rho,
+                            perm, acc, key, head_b, body)
+                    key[g] = key[j] + key_stride * (1 + nw + nw * nw + (w * nw + w2) * nw + w3)
+                    src[g] = j
+                    src_sign[g] = src_sign[ge] * (-1.0 if wall_drained[w3] else 1.0)
+                    g += 1
     return g - n_real
 
 
