@@ -424,3 +424,50 @@ def test_wall_ghosts_in_3d_at_a_corner():
             reversed_ = flipped[m] ^ flipped[q]
             assert stress[g, c] == (-stress[0, c] if reversed_ else stress[0, c])
         assert p[g] == pytest.approx(100.0 - 9810.0 * (x[g, 2] - x[0, 2]))
+
+
+def test_drained_plane_images_in_3d_equal_mirrored_particles():
+    """`images.image_sums` in 3D: the Darcy sums (Q, SUM_A, SUM_AP, SUM_APSI) of a block
+    under a drained top plane, with the images added, equal the sums over the block and
+    its mirror image across the plane with p* = -p (the odd extension), made as real
+    particles."""
+    from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
+    from psph.kernels.images import image_sums
+    from psph.kernels.interactions import pair_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    lay = sum_layout(3)
+    dx, h, m = 0.1, 0.12, 6
+    x = lattice_3d(m, dx, 0.1, seed=5)
+    n = len(x)
+    top = m * dx
+    rng = np.random.default_rng(6)
+    p = rng.normal(size=n) * 1e3
+    perm = rng.uniform(1e-4, 2e-4, n)
+    par = PairParams(h, rho_l_b0=0.0, rho_l_b1=0.0, rho_l_b2=-9810.0, record=True).typed()
+    z = np.zeros
+
+    def sweep(pos, pres, k):
+        count = len(pos)
+        fields = PairFields(pos, z((count, 3)), z((count, 3)), z((count, 6)), pres,
+                            pres.copy(), np.full(count, 0.4), np.full(count, dx ** 3),
+                            np.full(count, 2000.0), k, z((count, 3)), z((count, 6)))
+        sums = z((count, lay.NSUMS))
+        rec = PairRecord(z((64 * count, 2), np.int64), z((64 * count, 3)))
+        got = pair_sums_3d(count, n, count, fields, Cells(*cell_lists(pos, h)), par, sums,
+                           rec)
+        return sums, rec, got
+
+    sums, rec, m_pairs = sweep(x, p, perm)
+    planes = np.array([[2.0, top, -1.0, 1.0]])  # z = top, soil below, active
+    image_sums(n, m_pairs, rec.pairs, x, p, p.copy(), np.full(n, dx ** 3), perm, planes, h,
+               0.0, 0.0, 0.0, sums, -9810.0)
+    mirrored = x.copy()
+    mirrored[:, 2] = 2.0 * top - x[:, 2]
+    both, _, _ = sweep(np.vstack([x, mirrored]), np.concatenate([p, -p]),
+                       np.concatenate([perm, perm]))
+    darcy = slice(lay.Q, lay.SUM_APSI + 1)
+    near = x[:, 2] > top - 2.0 * h
+    assert near.sum() > 0
+    assert np.allclose(sums[:n, darcy], both[:n, darcy], rtol=1e-10,
+                       atol=1e-10 * np.abs(both[:n, darcy]).max())

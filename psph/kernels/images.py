@@ -22,26 +22,33 @@ import math
 import numba as nb
 import numpy as np
 
-from psph.kernels.spline import dw_cubic
-from psph.kernels.sum_columns import (
-    Q_X,
-    Q_Y,
-    SUM_A,
-    SUM_AP,
-    SUM_APSI,
-)
+from psph.kernels.spline import dw_cubic_dim
+from psph.kernels.sum_columns import Q_X, SUM_A, SUM_AP, SUM_APSI, sum_layout
+
+# the Darcy columns: Q (dim), then SUM_A, SUM_AP, SUM_APSI in a row, in 2D and 3D
+Q3, SUM_A3 = sum_layout(3).Q, sum_layout(3).SUM_A
+assert SUM_AP == SUM_A + 1 and SUM_APSI == SUM_A + 2 and sum_layout(3).SUM_APSI == SUM_A3 + 2
 
 
 @nb.njit(cache=True, inline="always")
-def _add_image(sums, i, vol_j, kbar, f2, p_image, d0, d1, rho_l_b0, rho_l_b1):
-    """One image neighbour at x_i + (d0, d1) with pressure p_image into row i of sums
-    (indexed in place: a row view per pair costs more than the pair's arithmetic)."""
+def _add_image(sums, i, vol_j, kbar, f2, p_image, d0, d1, d2, b0, b1, b2, three):
+    """One image neighbour at x_i + (d0, d1[, d2]) with pressure p_image into row i of
+    sums (indexed in place: a row view per pair costs more than the pair's arithmetic);
+    b = rho_l times the body force; three: the 3D layout of sums."""
     aij = vol_j * kbar * f2
-    sums[i, Q_X] += vol_j * d0 * f2
-    sums[i, Q_Y] += vol_j * d1 * f2
-    sums[i, SUM_A] += aij
-    sums[i, SUM_AP] += aij * p_image
-    sums[i, SUM_APSI] += aij * -(rho_l_b0 * d0 + rho_l_b1 * d1)
+    if three:
+        cq, ca = Q3, SUM_A3
+        sums[i, cq + 2] += vol_j * d2 * f2
+    else:
+        cq, ca = Q_X, SUM_A
+    sums[i, cq] += vol_j * d0 * f2
+    sums[i, cq + 1] += vol_j * d1 * f2
+    sums[i, ca] += aij
+    sums[i, ca + 1] += aij * p_image  # SUM_AP
+    head = b0 * d0 + b1 * d1
+    if three:
+        head += b2 * d2
+    sums[i, ca + 2] += aij * -head  # SUM_APSI
 
 
 @nb.njit(cache=True, inline="always")
@@ -53,30 +60,55 @@ def _plane(planes, q):
 
 
 @nb.njit(cache=True, inline="always")
+def _others(ax):
+    """The other two axes of ax (in 2D, where ax is 0 or 1, the first is the other)."""
+    return (1 if ax == 0 else 0), (1 if ax == 2 else 2)
+
+
+@nb.njit(cache=True, inline="always")
 def _image_of_pair(x, a, b, ax, pos, sg, support2):
-    """(d_ax, d_o, r) of b's image seen from a across the plane x[ax] = pos (d_ax along the
-    axis, d_o across; the same for a's image seen from b, d_o reversed), or r = -1 when a
-    row is beyond the plane or the image is out of the 2h support."""
+    """(d_ax, d_o1, d_o2, r) of b's image seen from a across the plane x[ax] = pos (d_ax
+    along the axis, d_o1 and d_o2 across, `_others`; d_o2 = 0 in 2D; the same for a's
+    image seen from b, d_o reversed), or r = -1 when a row is beyond the plane or the
+    image is out of the 2h support."""
     if sg * (x[a, ax] - pos) <= 0.0 or sg * (x[b, ax] - pos) <= 0.0:
-        return 0.0, 0.0, -1.0
+        return 0.0, 0.0, 0.0, -1.0
+    o1, o2 = _others(ax)
     d_ax = 2.0 * pos - x[a, ax] - x[b, ax]  # x_b*[ax] - x_a[ax] = x_a*[ax] - x_b[ax]
-    d_o = x[b, 1 - ax] - x[a, 1 - ax]
-    r2 = d_ax * d_ax + d_o * d_o
+    d_o1 = x[b, o1] - x[a, o1]
+    r2 = d_ax * d_ax + d_o1 * d_o1
+    d_o2 = 0.0
+    if x.shape[1] == 3:
+        d_o2 = x[b, o2] - x[a, o2]
+        r2 += d_o2 * d_o2
     if r2 >= support2:
-        return 0.0, 0.0, -1.0
-    return d_ax, d_o, math.sqrt(r2)
+        return 0.0, 0.0, 0.0, -1.0
+    return d_ax, d_o1, d_o2, math.sqrt(r2)
+
+
+@nb.njit(cache=True, inline="always")
+def _components(ax, d_ax, d_o1, d_o2):
+    """(d0, d1, d2) of a displacement d_ax along ax and (d_o1, d_o2) across (`_others`)."""
+    if ax == 0:
+        return d_ax, d_o1, d_o2
+    if ax == 1:
+        return d_o1, d_ax, d_o2
+    return d_o1, d_o2, d_ax
 
 
 @nb.njit(cache=True, error_model="numpy")
 def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: np.ndarray,
                p_prev: np.ndarray, vol: np.ndarray, perm: np.ndarray, planes: np.ndarray,
                h: float, tpi_alpha: float, rho_l_b0: float, rho_l_b1: float,
-               sums: np.ndarray) -> None:
-    """Add the images across each active plane to the Darcy sums (columns 14-18) of owned
-    rows: the image of the other row of every recorded pair, then each row's own image.
-    p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the elevation head psi = -rho_l b.x
-    is taken at the image's position (it is a known field, not mirrored)."""
+               sums: np.ndarray, rho_l_b2: float = 0.0) -> None:
+    """Add the images across each active plane to the Darcy sums (Q, SUM_A, SUM_AP,
+    SUM_APSI) of owned rows: the image of the other row of every recorded pair, then each
+    row's own image. p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the elevation head
+    psi = -rho_l b.x is taken at the image's position (it is a known field, not
+    mirrored). 2D or 3D by x (sums of the 3D layout in 3D)."""
     support2 = 4.0 * h * h
+    dim = x.shape[1]
+    three = dim == 3
     for q in range(planes.shape[0]):
         ax, pos, sg = _plane(planes, q)
         if ax < 0:
@@ -84,28 +116,31 @@ def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: 
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
-            d_ax, d_o, r = _image_of_pair(x, a, b, ax, pos, sg, support2)
+            d_ax, d_o1, d_o2, r = _image_of_pair(x, a, b, ax, pos, sg, support2)
             if r < 0.0:
                 continue
-            f2 = -2.0 * dw_cubic(r, h) / r
+            f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
             kbar = 0.5 * (perm[a] + perm[b])
             if a < n_owned:
                 pt = p[b] + tpi_alpha * (p[b] - p_prev[b])
-                d0, d1 = (d_ax, d_o) if ax == 0 else (d_o, d_ax)
-                _add_image(sums, a, vol[b], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+                d0, d1, d2 = _components(ax, d_ax, d_o1, d_o2)
+                _add_image(sums, a, vol[b], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
+                           rho_l_b2, three)
             if b < n_owned:
                 pt = p[a] + tpi_alpha * (p[a] - p_prev[a])
-                d0, d1 = (d_ax, -d_o) if ax == 0 else (-d_o, d_ax)
-                _add_image(sums, b, vol[a], kbar, f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+                d0, d1, d2 = _components(ax, d_ax, -d_o1, -d_o2)
+                _add_image(sums, b, vol[a], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
+                           rho_l_b2, three)
         for i in range(n_owned):
             d_ax = 2.0 * (pos - x[i, ax])
             if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
                 continue
             r = abs(d_ax)
-            f2 = -2.0 * dw_cubic(r, h) / r
+            f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
             pt = p[i] + tpi_alpha * (p[i] - p_prev[i])
-            d0, d1 = (d_ax, 0.0) if ax == 0 else (0.0, d_ax)
-            _add_image(sums, i, vol[i], perm[i], f2, -pt, d0, d1, rho_l_b0, rho_l_b1)
+            d0, d1, d2 = _components(ax, d_ax, 0.0, 0.0)
+            _add_image(sums, i, vol[i], perm[i], f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
+                       rho_l_b2, three)
 
 
 @nb.njit(cache=True)
@@ -140,10 +175,10 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
-            r = _image_of_pair(x, a, b, ax, pos, sg, support2)[2]
+            r = _image_of_pair(x, a, b, ax, pos, sg, support2)[3]
             if r < 0.0:
                 continue
-            wi = -2.0 * dw_cubic(r, h) / r * (darcy * 0.5 * (perm[a] + perm[b])
+            wi = -2.0 * dw_cubic_dim(r, h, x.shape[1]) / r * (darcy * 0.5 * (perm[a] + perm[b])
                                                + rho_scale * 2.0 / (rho[a] + rho[b]))
             w_diag[k] += wi
             w_off[k] -= wi
@@ -152,7 +187,7 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
             if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
                 continue
             r = abs(d_ax)
-            storage[i] += 2.0 * vol[i] * (-2.0 * dw_cubic(r, h) / r) * (
+            storage[i] += 2.0 * vol[i] * (-2.0 * dw_cubic_dim(r, h, x.shape[1]) / r) * (
                 darcy * perm[i] + rho_scale / rho[i])
 
 
