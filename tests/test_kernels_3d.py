@@ -471,3 +471,26 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
     assert near.sum() > 0
     assert np.allclose(sums[:n, darcy], both[:n, darcy], rtol=1e-10,
                        atol=1e-10 * np.abs(both[:n, darcy]).max())
+
+
+def test_artificial_stress_in_3d_is_minus_epsilon_times_the_tensile_part():
+    """`artificial_stress` with six columns: R = -epsilon sum_{s_k > 0} s_k n_k n_k^T
+    against numpy's eigen-decomposition (compression contributes nothing); a plane
+    state gives the 2D kernel's R_xx, R_yy, R_xy."""
+    from psph.kernels.artificial_stress import artificial_stress
+
+    rng = np.random.default_rng(8)
+    voigt = [[0, 3, 5], [3, 1, 4], [5, 4, 2]]
+    stress = rng.normal(size=(50, 6)) * 1e4
+    stress[0] = [-1e4, -2e4, -3e4, 0.0, 0.0, 0.0]  # all compressive: R = 0
+    stress[1] = [5e3, -2e3, 0.0, 3e3, 0.0, 0.0]  # a plane state
+    out = np.zeros((50, 6))
+    artificial_stress(50, stress, 0.3, out)
+    for i in range(50):
+        s, n = np.linalg.eigh(stress[i][voigt])
+        ref = -0.3 * (n * np.where(s > 0.0, s, 0.0)) @ n.T
+        assert np.allclose(out[i][voigt], ref, rtol=1e-10, atol=1e-9)
+    assert np.all(out[0] == 0.0)
+    plane = np.zeros((1, 3))
+    artificial_stress(1, stress[1:2, :4], 0.3, plane)
+    assert np.allclose(out[1, [0, 1, 3]], plane[0], rtol=1e-10, atol=1e-9)

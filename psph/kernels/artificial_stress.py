@@ -17,11 +17,19 @@ the total stress and -76 kPa with R from sigma' or with no artificial stress at 
 import math
 
 import numba as nb
+import numpy as np
 
 
 @nb.njit(cache=True)
 def artificial_stress(n, stress, epsilon, out):
-    """out[i] = (R_xx, R_yy, R_xy) for rows 0..n-1 (Pa)."""
+    """out[i] = (R_xx, R_yy, R_xy) for rows 0..n-1 (Pa); in 3D (out with 6 columns)
+    (R_xx, R_yy, R_zz, R_xy, R_yz, R_zx) from the three principal stresses
+    (`_tensile_part_3d`)."""
+    if out.shape[1] == 6:
+        a, vec, r = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))  # once a call
+        for i in range(n):
+            _tensile_part_3d(stress, i, epsilon, out, a, vec, r)
+        return
     for i in range(n):
         sxx = stress[i, 0]
         syy = stress[i, 1]
@@ -42,3 +50,51 @@ def artificial_stress(n, stress, epsilon, out):
         out[i, 0] = 0.5 * (r1 + r2) + 0.5 * (r1 - r2) * cos2
         out[i, 1] = 0.5 * (r1 + r2) - 0.5 * (r1 - r2) * cos2
         out[i, 2] = 0.5 * (r1 - r2) * sin2
+
+
+@nb.njit(cache=True)
+def _tensile_part_3d(stress, i, epsilon, out, a, vec, r):
+    """out[i] = -epsilon sum over the tensile principal stresses s_k of s_k n_k n_k^T,
+    from sigma'_i (Voigt xx, yy, zz, xy, yz, zx): the eigenpairs by cyclic Jacobi
+    rotations (converged to round-off in a few sweeps for 3 x 3). a, vec, r: 3 x 3
+    scratch."""
+    a[0, 0], a[1, 1], a[2, 2] = stress[i, 0], stress[i, 1], stress[i, 2]
+    a[0, 1] = a[1, 0] = stress[i, 3]
+    a[1, 2] = a[2, 1] = stress[i, 4]
+    a[2, 0] = a[0, 2] = stress[i, 5]
+    for m in range(3):
+        for q in range(3):
+            vec[m, q] = 1.0 if m == q else 0.0
+            r[m, q] = 0.0
+    scale = abs(a[0, 0]) + abs(a[1, 1]) + abs(a[2, 2]) + abs(a[0, 1]) + abs(a[1, 2]) \
+        + abs(a[2, 0])
+    for _ in range(50):
+        off = abs(a[0, 1]) + abs(a[1, 2]) + abs(a[2, 0])
+        if off <= 1e-15 * scale:
+            break
+        for p, q in ((0, 1), (1, 2), (0, 2)):
+            if a[p, q] == 0.0:
+                continue
+            theta = 0.5 * (a[q, q] - a[p, p]) / a[p, q]
+            t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+            c = 1.0 / math.sqrt(t * t + 1.0)
+            sn = t * c
+            for k in range(3):  # a <- J^T a J, vec <- vec J
+                akp, akq = a[k, p], a[k, q]
+                a[k, p] = c * akp - sn * akq
+                a[k, q] = sn * akp + c * akq
+            for k in range(3):
+                apk, aqk = a[p, k], a[q, k]
+                a[p, k] = c * apk - sn * aqk
+                a[q, k] = sn * apk + c * aqk
+            for k in range(3):
+                vkp, vkq = vec[k, p], vec[k, q]
+                vec[k, p] = c * vkp - sn * vkq
+                vec[k, q] = sn * vkp + c * vkq
+    for k in range(3):
+        if a[k, k] > 0.0:
+            for m in range(3):
+                for q in range(3):
+                    r[m, q] -= epsilon * a[k, k] * vec[m, k] * vec[q, k]
+    out[i, 0], out[i, 1], out[i, 2] = r[0, 0], r[1, 1], r[2, 2]
+    out[i, 3], out[i, 4], out[i, 5] = r[0, 1], r[1, 2], r[2, 0]
