@@ -28,3 +28,14 @@ def pick(m: int, x0: float, x1: float, x2: float) -> float:
     if m == 1:
         return x1
     return x2
+
+
+@nb.njit(cache=True, inline="always")
+def add_outer(sums, i, c, dim, w, x0, x1, x2, g0, g1, g2):
+    """sums[i, c + m dim + q] += w x_m g_q for m, q < dim: a pair's share of a tensor sum
+    (M, GV, GS, GN, GA of `sum_columns.py`), in the 2D kernels' order of operations,
+    (w x_m) g_q."""
+    for m in range(dim):
+        xm = pick(m, x0, x1, x2)
+        for q in range(dim):
+            sums[i, c + m * dim + q] += w * xm * pick(q, g0, g1, g2)

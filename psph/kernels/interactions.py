@@ -33,7 +33,7 @@ import math
 
 import numba as nb
 
-from psph.kernels.dims import pick
+from psph.kernels.dims import add_outer, pick
 from psph.kernels.neighbours import half_stencil, half_stencil_3d
 from psph.kernels.spline import dw_cubic_dim, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
@@ -207,76 +207,53 @@ def make_pair_sums(dim: int):
                         visc_b = rho_a * va * pi_ab
                         poro_a = poro[a]
                         poro_b = poro[b]
+                        dd0 = ds0 - dv0
+                        dd1 = ds1 - dv1
+                        dd2 = ds2 - dv2
                         # a's sums with V_b, then b's with V_a (x_ab and g change sign)
                         if own_a:
-                            for m in range(dim):
-                                xm = pick(m, dx0, dx1, dx2)
-                                for q in range(dim):
-                                    sums[a, cm + m * dim + q] += vb * xm * pick(q, g0, g1, g2)
-                            for m in range(dim):
-                                dvm = pick(m, dv0, dv1, dv2)
-                                for q in range(dim):
-                                    sums[a, cgv + m * dim + q] += vb * dvm * pick(q, g0, g1, g2)
+                            add_outer(sums, a, cm, dim, vb, dx0, dx1, dx2, g0, g1, g2)
+                            add_outer(sums, a, cgv, dim, vb, dv0, dv1, dv2, g0, g1, g2)
                             if ghost_pair:
-                                for m in range(dim):
-                                    ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
-                                    for q in range(dim):
-                                        sums[a, cgs + m * dim + q] += vb * ddm * pick(q, g0, g1, g2)
+                                add_outer(sums, a, cgs, dim, vb, dd0, dd1, dd2, g0, g1, g2)
                             for m in range(dim):
                                 sums[a, cdv + m] += (vb * pick(m, t0, t1, t2) / rho_a
                                                      - visc_a * pick(m, g0, g1, g2))
                             if coupled:
-                                wn = vb * (1.0 - poro_b)
+                                add_outer(sums, a, cgn, dim, vb * (1.0 - poro_b), ds0, ds1,
+                                          ds2, g0, g1, g2)
                                 for m in range(dim):
                                     gm = pick(m, g0, g1, g2)
                                     sums[a, cgp + m] += vb * dp * gm
-                                    dsm = pick(m, ds0, ds1, ds2)
-                                    for q in range(dim):
-                                        sums[a, cgn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
                                     sums[a, cq + m] += vb * pick(m, dx0, dx1, dx2) * f2
                                 aij = vb * kbar * f2
                                 sums[a, ca] += aij
                                 sums[a, cap_] += aij * ptb
                                 sums[a, capsi] += aij * dpsi
                         if own_b:
-                            for m in range(dim):
-                                xm = pick(m, dx0, dx1, dx2)
-                                for q in range(dim):
-                                    sums[b, cm + m * dim + q] += va * xm * pick(q, g0, g1, g2)
-                            for m in range(dim):
-                                dvm = pick(m, dv0, dv1, dv2)
-                                for q in range(dim):
-                                    sums[b, cgv + m * dim + q] += va * dvm * pick(q, g0, g1, g2)
+                            add_outer(sums, b, cm, dim, va, dx0, dx1, dx2, g0, g1, g2)
+                            add_outer(sums, b, cgv, dim, va, dv0, dv1, dv2, g0, g1, g2)
                             if ghost_pair:
-                                for m in range(dim):
-                                    ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
-                                    for q in range(dim):
-                                        sums[b, cgs + m * dim + q] += va * ddm * pick(q, g0, g1, g2)
+                                add_outer(sums, b, cgs, dim, va, dd0, dd1, dd2, g0, g1, g2)
                             for m in range(dim):
                                 sums[b, cdv + m] += (-va * pick(m, t0, t1, t2) / rho_b
                                                      + visc_b * pick(m, g0, g1, g2))
                             if coupled:
-                                wn = va * (1.0 - poro_a)
+                                add_outer(sums, b, cgn, dim, va * (1.0 - poro_a), ds0, ds1,
+                                          ds2, g0, g1, g2)
                                 for m in range(dim):
                                     gm = pick(m, g0, g1, g2)
                                     sums[b, cgp + m] += va * dp * gm
-                                    dsm = pick(m, ds0, ds1, ds2)
-                                    for q in range(dim):
-                                        sums[b, cgn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
                                     sums[b, cq + m] -= va * pick(m, dx0, dx1, dx2) * f2
                                 aij = va * kbar * f2
                                 sums[b, ca] += aij
                                 sums[b, cap_] += aij * pta
                                 sums[b, capsi] -= aij * dpsi
                         if acc_term and coupled:
-                            for m in range(dim):
-                                kam = pick(m, ka0, ka1, ka2)
-                                for q in range(dim):
-                                    gq = pick(q, g0, g1, g2)
-                                    if own_a:
-                                        sums[a, cga + m * dim + q] += vb * kam * gq
-                                    if own_b:
-                                        sums[b, cga + m * dim + q] += va * kam * gq
+                            if own_a:
+                                add_outer(sums, a, cga, dim, vb, ka0, ka1, ka2, g0, g1, g2)
+                            if own_b:
+                                add_outer(sums, b, cga, dim, va, ka0, ka1, ka2, g0, g1, g2)
         return n_pairs if n_pairs <= cap_pairs else -1
 
     return pair_sums
@@ -335,21 +312,11 @@ def make_velocity_gradient_sums(dim: int):
                 if i >= n_owned:
                     continue
                 vj = vol[j]
-                for m in range(dim):
-                    dvm = pick(m, dv0, dv1, dv2)
-                    for q in range(dim):
-                        sums[i, gv + m * dim + q] += vj * dvm * pick(q, g0, g1, g2)
+                add_outer(sums, i, gv, dim, vj, dv0, dv1, dv2, g0, g1, g2)
                 if ghost_pair:
-                    for m in range(dim):
-                        ddm = pick(m, ds0, ds1, ds2) - pick(m, dv0, dv1, dv2)
-                        for q in range(dim):
-                            sums[i, gs + m * dim + q] += vj * ddm * pick(q, g0, g1, g2)
+                    add_outer(sums, i, gs, dim, vj, ds0 - dv0, ds1 - dv1, ds2 - dv2, g0, g1, g2)
                 if coupled:
-                    wn = vj * (1.0 - poro[j])
-                    for m in range(dim):
-                        dsm = pick(m, ds0, ds1, ds2)
-                        for q in range(dim):
-                            sums[i, gn + m * dim + q] += wn * dsm * pick(q, g0, g1, g2)
+                    add_outer(sums, i, gn, dim, vj * (1.0 - poro[j]), ds0, ds1, ds2, g0, g1, g2)
 
     return velocity_gradient_sums
 
