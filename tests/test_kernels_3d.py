@@ -432,7 +432,7 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
     its mirror image across the plane with p* = -p (the odd extension), made as real
     particles."""
     from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
-    from psph.kernels.images import image_sums
+    from psph.kernels.images import image_sums_3d
     from psph.kernels.interactions import pair_sums_3d
     from psph.kernels.sum_columns import sum_layout
 
@@ -460,8 +460,8 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
 
     sums, rec, m_pairs = sweep(x, p, perm)
     planes = np.array([[2.0, top, -1.0, 1.0]])  # z = top, soil below, active
-    image_sums(n, m_pairs, rec.pairs, x, p, p.copy(), np.full(n, dx ** 3), perm, planes, h,
-               0.0, 0.0, 0.0, sums, -9810.0)
+    image_sums_3d(n, m_pairs, rec.pairs, x, p, p.copy(), np.full(n, dx ** 3), perm, planes, h,
+                  0.0, 0.0, 0.0, sums, -9810.0)
     mirrored = x.copy()
     mirrored[:, 2] = 2.0 * top - x[:, 2]
     both, _, _ = sweep(np.vstack([x, mirrored]), np.concatenate([p, -p]),

@@ -36,11 +36,13 @@ import numba as nb
 @nb.njit(cache=True)
 def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev, poro, vol,
             rho, perm, acc, key, head_b, body):
-    dim = x.shape[1]
-    for d in range(dim):
-        x[dst, d] = x[src, d]
+    three = x.shape[1] == 3
+    x[dst, 0] = x[src, 0]
+    x[dst, 1] = x[src, 1]
+    if three:
+        x[dst, 2] = x[src, 2]
     x[dst, axis] = 2.0 * pos - x[src, axis]
-    for d in range(dim):
+    for d in range(3 if three else 2):
         if d == axis or fixed:
             v[dst, d] = -v[src, d]
             acc[dst, d] = -acc[src, d]
@@ -54,15 +56,16 @@ def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev
     # free slip: the shear components on the wall's plane reversed, so a real-ghost pair
     # carries no shear traction; fixed: kept, so the wall's shear reaction resists sliding
     # along it. 2D: xy; 3D: xy, yz, zx, those with the wall's normal axis
-    for c in range(3, stress.shape[1]):
-        on_normal = axis == c - 3 or axis == (c - 2) % 3
-        stress[dst, c] = stress[src, c] if (fixed or not on_normal) else -stress[src, c]
+    stress[dst, 3] = stress[src, 3] if (fixed or axis == 2) else -stress[src, 3]
+    if three:
+        stress[dst, 4] = stress[src, 4] if (fixed or axis == 0) else -stress[src, 4]
+        stress[dst, 5] = stress[src, 5] if (fixed or axis == 1) else -stress[src, 5]
     if drained:
         p[dst] = -p[src]
         p_prev[dst] = -p_prev[src]
     else:
         dp = head_b[0] * (x[dst, 0] - x[src, 0]) + head_b[1] * (x[dst, 1] - x[src, 1])
-        if dim == 3:
+        if three:
             dp += head_b[2] * (x[dst, 2] - x[src, 2])
         p[dst] = p[src] + dp
         p_prev[dst] = p_prev[src] + dp
@@ -98,10 +101,12 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
     2D or 3D by x: near two walls of different axes a particle also gets the ghost
     mirrored across both (an edge), near three (3D) the one across all three (a corner)."""
     nw = wall_axis.shape[0]
-    dim = x.shape[1]
+    three = x.shape[1] == 3
     for j in range(n_real):
-        for d in range(dim):
-            v_slip[j, d] = v[j, d]
+        v_slip[j, 0] = v[j, 0]
+        v_slip[j, 1] = v[j, 1]
+        if three:
+            v_slip[j, 2] = v[j, 2]
     g = n_real
     for j in range(n_real):
         for w in range(nw):

@@ -66,7 +66,7 @@ def _others(ax):
 
 
 @nb.njit(cache=True, inline="always")
-def _image_of_pair(x, a, b, ax, pos, sg, support2):
+def _image_of_pair(x, a, b, ax, pos, sg, support2, three):
     """(d_ax, d_o1, d_o2, r) of b's image seen from a across the plane x[ax] = pos (d_ax
     along the axis, d_o1 and d_o2 across, `_others`; d_o2 = 0 in 2D; the same for a's
     image seen from b, d_o reversed), or r = -1 when a row is beyond the plane or the
@@ -78,7 +78,7 @@ def _image_of_pair(x, a, b, ax, pos, sg, support2):
     d_o1 = x[b, o1] - x[a, o1]
     r2 = d_ax * d_ax + d_o1 * d_o1
     d_o2 = 0.0
-    if x.shape[1] == 3:
+    if three:
         d_o2 = x[b, o2] - x[a, o2]
         r2 += d_o2 * d_o2
     if r2 >= support2:
@@ -96,51 +96,59 @@ def _components(ax, d_ax, d_o1, d_o2):
     return d_o1, d_o2, d_ax
 
 
-@nb.njit(cache=True, error_model="numpy")
-def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: np.ndarray,
-               p_prev: np.ndarray, vol: np.ndarray, perm: np.ndarray, planes: np.ndarray,
-               h: float, tpi_alpha: float, rho_l_b0: float, rho_l_b1: float,
-               sums: np.ndarray, rho_l_b2: float = 0.0) -> None:
-    """Add the images across each active plane to the Darcy sums (Q, SUM_A, SUM_AP,
-    SUM_APSI) of owned rows: the image of the other row of every recorded pair, then each
-    row's own image. p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the elevation head
-    psi = -rho_l b.x is taken at the image's position (it is a known field, not
-    mirrored). 2D or 3D by x (sums of the 3D layout in 3D)."""
-    support2 = 4.0 * h * h
-    dim = x.shape[1]
+def make_image_sums(dim: int):
+    """`image_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
     three = dim == 3
-    for q in range(planes.shape[0]):
-        ax, pos, sg = _plane(planes, q)
-        if ax < 0:
-            continue
-        for k in range(n_pairs):
-            a = pairs[k, 0]
-            b = pairs[k, 1]
-            d_ax, d_o1, d_o2, r = _image_of_pair(x, a, b, ax, pos, sg, support2)
-            if r < 0.0:
+
+    @nb.njit(cache=True, error_model="numpy")
+    def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: np.ndarray,
+                   p_prev: np.ndarray, vol: np.ndarray, perm: np.ndarray, planes: np.ndarray,
+                   h: float, tpi_alpha: float, rho_l_b0: float, rho_l_b1: float,
+                   sums: np.ndarray, rho_l_b2: float = 0.0) -> None:
+        """Add the images across each active plane to the Darcy sums (Q, SUM_A, SUM_AP,
+        SUM_APSI) of owned rows: the image of the other row of every recorded pair, then each
+        row's own image. p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the elevation head
+        psi = -rho_l b.x is taken at the image's position (it is a known field, not
+        mirrored). 2D or 3D by x (sums of the 3D layout in 3D)."""
+        support2 = 4.0 * h * h
+        for q in range(planes.shape[0]):
+            ax, pos, sg = _plane(planes, q)
+            if ax < 0:
                 continue
-            f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
-            kbar = 0.5 * (perm[a] + perm[b])
-            if a < n_owned:
-                pt = p[b] + tpi_alpha * (p[b] - p_prev[b])
-                d0, d1, d2 = _components(ax, d_ax, d_o1, d_o2)
-                _add_image(sums, a, vol[b], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
+            for k in range(n_pairs):
+                a = pairs[k, 0]
+                b = pairs[k, 1]
+                d_ax, d_o1, d_o2, r = _image_of_pair(x, a, b, ax, pos, sg, support2, three)
+                if r < 0.0:
+                    continue
+                f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
+                kbar = 0.5 * (perm[a] + perm[b])
+                if a < n_owned:
+                    pt = p[b] + tpi_alpha * (p[b] - p_prev[b])
+                    d0, d1, d2 = _components(ax, d_ax, d_o1, d_o2)
+                    _add_image(sums, a, vol[b], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
+                               rho_l_b2, three)
+                if b < n_owned:
+                    pt = p[a] + tpi_alpha * (p[a] - p_prev[a])
+                    d0, d1, d2 = _components(ax, d_ax, -d_o1, -d_o2)
+                    _add_image(sums, b, vol[a], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
+                               rho_l_b2, three)
+            for i in range(n_owned):
+                d_ax = 2.0 * (pos - x[i, ax])
+                if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
+                    continue
+                r = abs(d_ax)
+                f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
+                pt = p[i] + tpi_alpha * (p[i] - p_prev[i])
+                d0, d1, d2 = _components(ax, d_ax, 0.0, 0.0)
+                _add_image(sums, i, vol[i], perm[i], f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
                            rho_l_b2, three)
-            if b < n_owned:
-                pt = p[a] + tpi_alpha * (p[a] - p_prev[a])
-                d0, d1, d2 = _components(ax, d_ax, -d_o1, -d_o2)
-                _add_image(sums, b, vol[a], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
-                           rho_l_b2, three)
-        for i in range(n_owned):
-            d_ax = 2.0 * (pos - x[i, ax])
-            if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
-                continue
-            r = abs(d_ax)
-            f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
-            pt = p[i] + tpi_alpha * (p[i] - p_prev[i])
-            d0, d1, d2 = _components(ax, d_ax, 0.0, 0.0)
-            _add_image(sums, i, vol[i], perm[i], f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
-                       rho_l_b2, three)
+
+    return image_sums
+
+
+image_sums = make_image_sums(2)
+image_sums_3d = make_image_sums(3)
 
 
 @nb.njit(cache=True)
@@ -175,7 +183,7 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
-            r = _image_of_pair(x, a, b, ax, pos, sg, support2)[3]
+            r = _image_of_pair(x, a, b, ax, pos, sg, support2, x.shape[1] == 3)[3]
             if r < 0.0:
                 continue
             wi = -2.0 * dw_cubic_dim(r, h, x.shape[1]) / r * (darcy * 0.5 * (perm[a] + perm[b])

@@ -93,18 +93,20 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
     Particles outside the local grid (only possible after one left the domain, which the
     update reports as a failure) are clamped into its edge cells.
     """
-    dim = x.shape[1]
-    nc = 1
-    for d in range(dim):
-        nc *= ncell[d]
+    three = x.shape[1] == 3
+    ncx = ncell[0]
+    ncy = ncell[1]
+    ncz = ncell[2] if three else 1
+    nc = ncx * ncy * ncz
     for c in range(nc + 1):
         cell_start[c] = 0
     for i in range(n):
-        c = 0
-        for d in range(dim - 1, -1, -1):
-            cd = _clamped_cell(x[i, d], origin[d], cell_size, lo[d],
-                               lo[d] + ncell[d] - 1) - lo[d]
-            c = c * ncell[d] + cd
+        cx = _clamped_cell(x[i, 0], origin[0], cell_size, lo[0], lo[0] + ncx - 1) - lo[0]
+        cy = _clamped_cell(x[i, 1], origin[1], cell_size, lo[1], lo[1] + ncy - 1) - lo[1]
+        c = cy * ncx + cx
+        if three:
+            cz = _clamped_cell(x[i, 2], origin[2], cell_size, lo[2], lo[2] + ncz - 1) - lo[2]
+            c += cz * ncx * ncy
         cell_of[i] = c
         cell_start[c + 1] += 1
     for c in range(nc):
@@ -134,21 +136,32 @@ def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
     """Lowest cell coordinates `lo` and grid size `ncell` covering particles 0..n-1, with a
     one-cell margin, cell coordinates limited to [0, cmax] (the domain's grid); each
     (dim,), dim = x.shape[1]."""
-    dim = x.shape[1]
+    three = x.shape[1] == 3
     if n == 0:
-        for d in range(dim):
+        for d in range(x.shape[1]):
             lo[d] = 0
             ncell[d] = 1
         return
-    for d in range(dim):
-        cmin = 1 << 62
-        cmx = -(1 << 62)
-        for i in range(n):
-            cd = _clamped_cell(x[i, d], origin[d], cell_size, 1, cmax[d] - 1)
-            cmin = min(cmin, cd)
-            cmx = max(cmx, cd)
-        lo[d] = cmin - 1
-        ncell[d] = cmx - cmin + 3
+    c0min = c1min = c2min = 1 << 62
+    c0max = c1max = c2max = -(1 << 62)
+    for i in range(n):
+        c0 = _clamped_cell(x[i, 0], origin[0], cell_size, 1, cmax[0] - 1)
+        c1 = _clamped_cell(x[i, 1], origin[1], cell_size, 1, cmax[1] - 1)
+        c0min = min(c0min, c0)
+        c0max = max(c0max, c0)
+        c1min = min(c1min, c1)
+        c1max = max(c1max, c1)
+        if three:
+            c2 = _clamped_cell(x[i, 2], origin[2], cell_size, 1, cmax[2] - 1)
+            c2min = min(c2min, c2)
+            c2max = max(c2max, c2)
+    lo[0] = c0min - 1
+    lo[1] = c1min - 1
+    ncell[0] = c0max - c0min + 3
+    ncell[1] = c1max - c1min + 3
+    if three:
+        lo[2] = c2min - 1
+        ncell[2] = c2max - c2min + 3
 
 
 @nb.njit(cache=True)
