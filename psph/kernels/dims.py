@@ -39,3 +39,20 @@ def add_outer(sums, i, c, dim, w, x0, x1, x2, g0, g1, g2):
         xm = pick(m, x0, x1, x2)
         for q in range(dim):
             sums[i, c + m * dim + q] += w * xm * pick(q, g0, g1, g2)
+
+
+@nb.njit(cache=True, inline="always")
+def velocity_differences(v, v_slip, a, b, ghost_pair, dim):
+    """(dv0, dv1, dv2, ds0, ds1, ds2): v_b - v_a, and the free-slip v_slip_b - v_slip_a on a
+    pair with a wall ghost (else dv); the third components 0 in 2D."""
+    dv0 = v[b, 0] - v[a, 0]
+    dv1 = v[b, 1] - v[a, 1]
+    dv2 = v[b, 2] - v[a, 2] if dim == 3 else 0.0
+    ds0 = dv0
+    ds1 = dv1
+    ds2 = dv2
+    if ghost_pair:
+        ds0 = v_slip[b, 0] - v_slip[a, 0]
+        ds1 = v_slip[b, 1] - v_slip[a, 1]
+        ds2 = v_slip[b, 2] - v_slip[a, 2] if dim == 3 else 0.0
+    return dv0, dv1, dv2, ds0, ds1, ds2

@@ -33,7 +33,7 @@ import math
 
 import numba as nb
 
-from psph.kernels.dims import add_outer, pick
+from psph.kernels.dims import add_outer, pick, velocity_differences
 from psph.kernels.neighbours import half_stencil, half_stencil_3d
 from psph.kernels.spline import dw_cubic_dim, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
@@ -139,17 +139,9 @@ def make_pair_sums(dim: int):
                             n_pairs += 1
                         va = vol[a]
                         vb = vol[b]
-                        dv0 = v[b, 0] - v[a, 0]
-                        dv1 = v[b, 1] - v[a, 1]
-                        dv2 = v[b, 2] - v[a, 2] if dim == 3 else 0.0
                         ghost_pair = a >= n_real or b >= n_real
-                        ds0 = dv0
-                        ds1 = dv1
-                        ds2 = dv2
-                        if ghost_pair:
-                            ds0 = v_slip[b, 0] - v_slip[a, 0]
-                            ds1 = v_slip[b, 1] - v_slip[a, 1]
-                            ds2 = v_slip[b, 2] - v_slip[a, 2] if dim == 3 else 0.0
+                        dv0, dv1, dv2, ds0, ds1, ds2 = velocity_differences(
+                            v, v_slip, a, b, ghost_pair, dim)
                         # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
                         pab = p_weight * (p[a] + p[b])
                         sxx = stress[a, 0] + stress[b, 0] - pab
@@ -295,17 +287,9 @@ def make_velocity_gradient_sums(dim: int):
             g0 = pair_g[k, 0]
             g1 = pair_g[k, 1]
             g2 = pair_g[k, 2] if dim == 3 else 0.0
-            dv0 = v[b, 0] - v[a, 0]
-            dv1 = v[b, 1] - v[a, 1]
-            dv2 = v[b, 2] - v[a, 2] if dim == 3 else 0.0
             ghost_pair = a >= n_real or b >= n_real
-            ds0 = dv0
-            ds1 = dv1
-            ds2 = dv2
-            if ghost_pair:
-                ds0 = v_slip[b, 0] - v_slip[a, 0]
-                ds1 = v_slip[b, 1] - v_slip[a, 1]
-                ds2 = v_slip[b, 2] - v_slip[a, 2] if dim == 3 else 0.0
+            dv0, dv1, dv2, ds0, ds1, ds2 = velocity_differences(v, v_slip, a, b, ghost_pair,
+                                                                 dim)
             for side in range(2):  # a's sums with V_b, then b's with V_a
                 i = a if side == 0 else b
                 j = b if side == 0 else a
