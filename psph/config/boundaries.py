@@ -85,6 +85,9 @@ class Boundaries(_Model):
                              "domain.min[1] (wall motion, flow)")
     top: Boundary = Field(Boundary(), description="Top side of the domain box, y = "
                           "domain.max[1] (wall motion, flow)")
+    front: Boundary = Field(Boundary(), description="3D only: the side y = domain.min[1] "
+                            "(bottom and top are then z = domain.min[2], domain.max[2])")
+    back: Boundary = Field(Boundary(), description="3D only: the side y = domain.max[1]")
     polylines: list[Polyline] = Field([], description="Rigid polylines lined with boundary "
                                       "particles (issue 16)")
 
@@ -110,11 +113,20 @@ class Boundaries(_Model):
 # side -> (axis, which end of the domain (0 min, 1 max), sign: +1 soil at larger x[axis])
 SIDE_PLANES = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
               "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
+# in 3D the vertical is z: bottom and top are planes of z, front and back of y
+SIDE_PLANES_3D = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
+                  "front": (1, 0, 1.0), "back": (1, 1, -1.0),
+                  "bottom": (2, 0, 1.0), "top": (2, 1, -1.0)}
+
+
+def side_planes(dim: int) -> dict[str, tuple[int, int, float]]:
+    """The box sides of a `dim`-dimensional domain: (axis, end, sign) by name."""
+    return SIDE_PLANES if dim == 2 else SIDE_PLANES_3D
 
 
 class PlaneWalls(NamedTuple):
     """The sides of the domain box that are walls (motion not "free"), in the order left,
-    right, bottom, top: the plane x[axis] = pos, the sign of the soil's side, fixed or
+    right, (front, back,) bottom, top: the plane x[axis] = pos, the sign of the soil's side, fixed or
     free-slip."""
 
     sides: list[str]
@@ -125,13 +137,15 @@ class PlaneWalls(NamedTuple):
 
 
 def plane_walls(boundaries: Boundaries, lo, hi) -> PlaneWalls:
-    """The walls of `boundaries` on the domain box [lo, hi] (`domain.min`, `domain.max`)."""
-    walls = [(side, b) for side in SIDE_PLANES
+    """The walls of `boundaries` on the domain box [lo, hi] (`domain.min`, `domain.max`;
+    their length is the dimension)."""
+    planes = side_planes(len(lo))
+    walls = [(side, b) for side in planes
              if (b := getattr(boundaries, side)).motion != "free"]
     ends = (lo, hi)
     return PlaneWalls(
         [side for side, _ in walls],
-        np.array([SIDE_PLANES[s][0] for s, _ in walls], np.int64),
-        np.array([ends[SIDE_PLANES[s][1]][SIDE_PLANES[s][0]] for s, _ in walls], float),
-        np.array([SIDE_PLANES[s][2] for s, _ in walls], float),
+        np.array([planes[s][0] for s, _ in walls], np.int64),
+        np.array([ends[planes[s][1]][planes[s][0]] for s, _ in walls], float),
+        np.array([planes[s][2] for s, _ in walls], float),
         np.array([b.motion == "fixed" for _, b in walls], np.bool_))

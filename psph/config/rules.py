@@ -6,6 +6,7 @@ exit 2."""
 import math
 from pathlib import Path
 
+from psph.config.boundaries import side_planes
 from psph.config.materials import check_materials
 from psph.errors import SceneRule as _Rule
 from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
@@ -25,8 +26,10 @@ def check_scene(scene):
     validator): the domain, the particle sources, the materials, the initial state,
     probes, the schemes and the time step against Eq. (41) and TPI's bounds. Sets
     `scene.material` to the first material; raises `SceneRule` (key, value, rule)."""
+    check_dimension(scene)
     lo, hi = scene.domain.min, scene.domain.max
-    for d in range(2):
+    dim = scene.dim
+    for d in range(dim):
         if hi[d] <= lo[d]:
             raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
     pa = scene.particles
@@ -50,7 +53,7 @@ def check_scene(scene):
         if not Path(mesh.file).is_file():
             raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")
     for ib, b in enumerate(scene.particles.blocks):
-        for d in range(2):
+        for d in range(dim):
             if b.max[d] <= b.min[d]:
                 raise _Rule(f"particles.blocks[{ib}].max[{d}]", b.max[d],
                             f"must exceed particles.blocks[{ib}].min[{d}] = {b.min[d]}")
@@ -71,14 +74,14 @@ def check_scene(scene):
             where = "" if e.where in ("points", "file", "level") else f" {e.where}"
             raise _Rule(f"initial.water_table{where}", e.value, e.rule) from None
     if (scene.initial.k0 is not None or scene.initial.water_table is not None) \
-            and scene.gravity[1] >= 0.0:
+            and scene.gravity[dim - 1] >= 0.0:
         key = "initial.k0" if scene.initial.k0 is not None else "initial.water_table"
         raise _Rule(key, getattr(scene.initial, key.split(".")[1]),
-                    f"needs gravity along -y (gravity = {scene.gravity})")
+                    f"needs gravity along -{'yz'[dim - 2]} (gravity = {scene.gravity})")
     if scene.initial.undrained_load:
         check_undrained_load(scene)
     for name, pt in scene.output.probes.items():
-        for d in range(2):
+        for d in range(dim):
             if not lo[d] <= pt[d] <= hi[d]:
                 raise _Rule(f"output.probes.{name}", pt,
                             f"probe outside the domain [{lo}, {hi}]")
@@ -108,6 +111,44 @@ def check_scene(scene):
         check_tpi_stability(scene)
     check_integrator(scene)
     return scene
+
+
+def check_dimension(scene) -> None:
+    """Every point and vector of the scene has `dim` components; in 3D the sources and
+    boundaries that are 2D only so far are refused, in 2D the 3D-only sides."""
+    dim = scene.dim
+    vectors = [("domain.min", scene.domain.min), ("domain.max", scene.domain.max),
+               ("gravity", scene.gravity)]
+    for ib, b in enumerate(scene.particles.blocks):
+        vectors += [(f"particles.blocks[{ib}].min", b.min), (f"particles.blocks[{ib}].max",
+                                                             b.max)]
+    vectors += [(f"output.probes.{k}", v) for k, v in scene.output.probes.items()]
+    for ir, rm in enumerate(scene.remove):
+        vectors += [(f"remove[{ir}].{k}", v) for k, v in (("min", rm.min), ("max", rm.max))
+                    if v is not None]
+    for key, v in vectors:
+        if len(v) != dim:
+            raise _Rule(key, v, f"needs {dim} components in a {dim}D scene (dim = {dim}; "
+                        "a 3D scene gives [x, y, z], a 2D one [x, y])")
+    b = scene.boundaries
+    if dim == 2:
+        for side in ("front", "back"):
+            if side in b.model_fields_set:
+                raise _Rule(f"boundaries.{side}", getattr(b, side).motion,
+                            "3D only (a 2D scene has left, right, bottom, top)")
+        return
+    pa = scene.particles
+    two_d = [("particles.polygons", pa.polygons), ("particles.meshes", pa.meshes),
+             ("particles.layers", pa.layers), ("boundaries.polylines", b.polylines),
+             ("remove.polygon", [r for r in scene.remove if r.polygon is not None]),
+             ("loads.range", [ld for ld in scene.loads if ld.range is not None]),
+             ("initial.water_table", [] if scene.initial.water_table is None
+              or isinstance(scene.initial.water_table, float) else [1]),
+             ("initial.undrained_load", [1] if scene.initial.undrained_load else [])]
+    for key, items in two_d:
+        if items:
+            raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "
+                        "particles.blocks, box sides, a level water table)")
 
 
 def check_integrator(scene) -> None:
@@ -159,7 +200,7 @@ def check_tpi_stability(scene) -> None:
     0.75 and G <= `tpi_gain_limit`."""
     force = "set pressure.allow_unstable = true to force"
     drained = [getattr(scene.boundaries, side).drained_from
-               for side in ("left", "right", "bottom", "top")
+               for side in side_planes(scene.dim)
                if getattr(scene.boundaries, side).flow == "drained"]
     if scene.loads and scene.pressure.ponding != "drained" and \
             scene.pressure.explicit_until < min(drained, default=math.inf):

@@ -13,8 +13,12 @@ from psph.config.rules import check_scene
 
 Pos = Annotated[float, Field(gt=0)]
 Vec2 = Annotated[list[float], Field(min_length=2, max_length=2)]
+# a point or vector of the scene's dimension: [x, y] in 2D, [x, y, z] in 3D (the rules
+# check the count against `dim`, `rules.check_dimension`)
+Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
 
 SIDES = ("left", "right", "bottom", "top")
+SIDES_3D = ("left", "right", "front", "back", "bottom", "top")
 
 
 class _Model(BaseModel):
@@ -24,16 +28,18 @@ class _Model(BaseModel):
 class Domain(_Model):
     """The box bounded by the walls (m)."""
 
-    min: Vec2 = Field(description="Lower-left corner of the domain box [m]")
-    max: Vec2 = Field(description="Upper-right corner of the domain box; must exceed min [m]")
+    min: Vec = Field(description="Lower corner of the domain box, [x, y] or [x, y, z] (its "
+                     "length sets `dim` when dim is not given) [m]")
+    max: Vec = Field(description="Upper corner of the domain box; must exceed min [m]")
 
 
 class Block(_Model):
-    """A rectangle of soil filled with particles on a square lattice."""
+    """A rectangle (a box in 3D) of soil filled with particles on a square (cubic)
+    lattice."""
 
-    min: Vec2 = Field(description="Lower-left corner of the rectangle; its lattice starts "
-                      "here [m]")
-    max: Vec2 = Field(description="Upper-right corner of the rectangle; must exceed min [m]")
+    min: Vec = Field(description="Lower corner of the rectangle (box in 3D); its lattice "
+                     "starts here [m]")
+    max: Vec = Field(description="Upper corner of the rectangle (box); must exceed min [m]")
     material: str | None = Field(None, description="Name of a [[materials]] table; default "
                                  "the first material")
 
@@ -89,8 +95,8 @@ class Particles(_Model):
 class Load(_Model):
     """Distributed normal pressure on the outer particle layer of one side (Pa)."""
 
-    side: Literal["left", "right", "bottom", "top"] = Field(
-        "top", description="Side of the box the pressure acts on")
+    side: Literal["left", "right", "front", "back", "bottom", "top"] = Field(
+        "top", description="Side of the box the pressure acts on (front, back: 3D only)")
     pressure: float = Field(description="Normal pressure on the side's outer layer: held "
                             "after the ramp, or the p of p (1 − cos ωt) [Pa]")
     history: Literal["ramp", "harmonic"] = Field(
@@ -221,7 +227,7 @@ class Output(_Model):
         0.0, description="Time between snapshots; 0 keeps only `times` and the end [s]")
     history_interval: Pos = Field(1.0e-3, description="Time between history.csv rows "
                                   "(settlement, energy, probes) [s]")
-    probes: dict[str, Vec2] = Field(
+    probes: dict[str, Vec] = Field(
         {}, description="Named points whose nearest particle's p and u go into history.csv "
         "as p_<name>, ... [m]")
 
@@ -241,10 +247,10 @@ class Removal(_Model):
 
     at: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Time the region's particles are removed [s]")
-    min: Vec2 | None = Field(None, description="Lower-left corner of a box region (with "
-                             "max) [m]")
-    max: Vec2 | None = Field(None, description="Upper-right corner of a box region (with "
-                             "min) [m]")
+    min: Vec | None = Field(None, description="Lower corner of a box region (with max) "
+                            "[m]")
+    max: Vec | None = Field(None, description="Upper corner of a box region (with min) "
+                            "[m]")
     polygon: Annotated[list[Vec2], Field(min_length=3)] | None = Field(
         None, description="Vertices of a polygon region, at least 3 (instead of min/max) [m]")
 
@@ -302,9 +308,11 @@ class Scene(_Model):
     name: str = Field(description="Scene name; the default output directory is runs/<name>")
     description: str = Field("", description="One line describing the scene (printed by "
                              "`psph list`)")
-    dim: Literal[2] = Field(2, description="Spatial dimension (only 2, plane strain)")
-    gravity: Vec2 = Field([0.0, 0.0], description="Gravitational acceleration [g_x, g_y]; "
-                          "along −y for initial.k0 and water_table [m/s^2]")
+    dim: Literal[2, 3] = Field(2, description="Spatial dimension: 2 (plane strain, vertical "
+                               "y) or 3 (vertical z); default the length of domain.min")
+    gravity: Vec | None = Field(None, description="Gravitational acceleration [g_x, g_y] "
+                                "([g_x, g_y, g_z] in 3D); along the vertical, −y (−z), for "
+                                "initial.k0 and water_table; default zero [m/s^2]")
     domain: Domain = Field(description="The box bounded by the walls")
     particles: Particles = Field(description="Particle spacing, smoothing length and the soil "
                                  "sources")
@@ -335,17 +343,34 @@ class Scene(_Model):
     checkpoint: Checkpoint = Field(Checkpoint(), description="When restart checkpoints are "
                                    "written")
 
+    @model_validator(mode="before")
+    @classmethod
+    def _dimension(cls, data):
+        """`dim` from the domain's corner when the scene does not give it."""
+        if isinstance(data, dict) and "dim" not in data:
+            lo = data.get("domain", {}).get("min") if isinstance(data.get("domain"), dict) \
+                else None
+            if isinstance(lo, list) and len(lo) == 3:
+                data = {**data, "dim": 3}
+        return data
+
     @model_validator(mode="after")
     def _consistent(self) -> "Scene":
+        if self.gravity is None:
+            self.gravity = [0.0] * self.dim
         return check_scene(self)
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):
         """With [[materials]], `material` (their first) is not written back; without them,
-        no empty `materials` (the scene.toml of a one-material scene is as before)."""
+        no empty `materials` (the scene.toml of a one-material scene is as before); a 2D
+        scene has no front or back side."""
         d = handler(self)
         if isinstance(d, dict):
             d.pop("material" if self.materials else "materials", None)
+            if self.dim == 2 and isinstance(d.get("boundaries"), dict):
+                d["boundaries"].pop("front", None)  # the 3D-only sides
+                d["boundaries"].pop("back", None)
         return d
 
     @property

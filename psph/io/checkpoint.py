@@ -29,7 +29,7 @@ import numpy as np
 import psph
 from psph.errors import SceneError
 from psph.io.snapshots import write_rows
-from psph.state.particles import ADDED_FIELDS, FIELDS
+from psph.state.particles import ADDED_FIELDS, FIELDS, fields_of_dim
 
 FORMAT = "psph-checkpoint-1"
 
@@ -57,7 +57,7 @@ def write_checkpoint(path: Path, comm, store, meta: dict, history: list[dict] | 
         f.attrs["psph_version"] = psph.__version__
         f.attrs["meta"] = json.dumps(dict(meta, n_removed=r_total))
         g = f.create_group("particles")
-        for fld in FIELDS:
+        for fld in store.fields:
             a = store.arrays[fld.name]
             d = g.create_dataset(fld.name, shape=(total,) + a.shape[1:], dtype=a.dtype)
             write_rows(d, start, a[:n_local])
@@ -143,7 +143,7 @@ def read_checkpoint(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
         with f:
             n = meta["n_global"]
             arrays = {fld.name: f["particles"][fld.name][()] if fld.name in f["particles"]
-                      else np.zeros(n) for fld in FIELDS}
+                      else np.zeros(n) for fld in _fields(f)}
             n_rows = f["alive"].shape[0] if "alive" in f else meta["n_removed"]
             arrays["removed_ids"] = _removed_rows(f, 0, n_rows)
     except (OSError, KeyError, ValueError) as e:
@@ -225,8 +225,8 @@ def _to_owners(f: h5py.File, comm, dest: np.ndarray, lo: int, chunk: int, unread
     from mpi4py import MPI
 
     size = comm.Get_size()
-    names = [fld.name for fld in FIELDS]
-    widths = [fld.ncomp for fld in FIELDS]
+    names = [fld.name for fld in _fields(f)]
+    widths = [fld.ncomp for fld in _fields(f)]
     col = np.concatenate(([0], np.cumsum(widths)))
     w = int(col[-1])
     send_total = np.bincount(dest, minlength=size).astype(np.int64)
@@ -265,7 +265,7 @@ def _pack_chunk(f: h5py.File, a: int, b: int, order: np.ndarray, send: np.ndarra
                 col: np.ndarray, unreadable) -> None:
     """Rows a..b of every field, in `order`, into the columns `col` of `send`."""
     try:
-        for j, fld in enumerate(FIELDS):
+        for j, fld in enumerate(_fields(f)):
             if fld.name in f["particles"]:
                 rows = f["particles"][fld.name][a:b]
                 # (b - a, width): also for an empty slice, where reshape(0, -1) fails
@@ -273,6 +273,11 @@ def _pack_chunk(f: h5py.File, a: int, b: int, order: np.ndarray, send: np.ndarra
                     b - a, col[j + 1] - col[j])[order]
     except (OSError, KeyError, ValueError) as e:
         raise unreadable(e) from None
+
+
+def _fields(f: h5py.File) -> tuple:
+    """The particle fields of a checkpoint, with the widths of its dimension."""
+    return fields_of_dim(int(f["particles"]["x"].shape[1]))
 
 
 def _reason(e: Exception) -> str:

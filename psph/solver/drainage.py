@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from psph.config.boundaries import SIDE_PLANES as SIDES
+from psph.config.boundaries import side_planes
 from psph.kernels.images import row_displacement
 from psph.solver.exact_dots import ExactDots
 
@@ -39,13 +39,14 @@ class Drainage:
         self.wall_from = np.array([getattr(b, s).drained_from if drains(s) else math.inf
                                    for s in wall_sides])
         self.wall_drained = np.zeros(len(wall_sides), np.bool_)
-        free = [s for s in SIDES if drains(s) and s not in wall_sides]
+        sides = side_planes(scene.dim)
+        free = [s for s in sides if drains(s) and s not in wall_sides]
         self.plane_from = np.array([getattr(b, s).drained_from for s in free])
         self.planes = np.zeros((len(free), 4))  # axis, pos, sign, active (images.py)
         self.pos0 = np.zeros(len(free))
         bounds = soil_extent() if free else None
         for q, side in enumerate(free):
-            axis, end, sign = SIDES[side]
+            axis, end, sign = sides[side]
             edge = bounds[end, axis]
             self.pos0[q] = edge - sign * 0.5 * self.dx
             self.planes[q] = (axis, self.pos0[q], sign, 0.0)

@@ -2,10 +2,12 @@
 
 Rows 0..n_owned-1 are the particles this rank advances; then n_halo copies of neighbours'
 particles; then n_ghost wall ghosts. Every field is a float64 array of shape (cap,) or
-(cap, ncomp) allocated once with spare capacity and grown (never per step).
+(cap, ncomp) allocated once with spare capacity and grown (never per step). A vector has
+`dim` components; the effective stress 4 in 2D (xx, yy, zz, xy: plane strain) and 6 in
+3D (xx, yy, zz, xy, yz, zx, the Voigt order of the snapshots).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -16,27 +18,31 @@ class Field:
     it on neighbours (then it travels in halo messages and is mirrored on ghosts)."""
 
     name: str
-    ncomp: int
+    ncomp: int  # in 2D; VECTOR: dim components, STRESS: 4 in 2D, 6 in 3D
     unit: str
     description: str
     neighbour: bool
 
 
-FIELDS: tuple[Field, ...] = (
+VECTOR = -1
+STRESS = -2
+
+_FIELDS: tuple[Field, ...] = (
     Field("key", 1, "1", "stable global particle id (exact in float64 below 2**53)", True),
-    Field("x", 2, "m", "position", True),
-    Field("v", 2, "m/s", "velocity", True),
-    Field("stress", 4, "Pa", "effective stress xx, yy, zz, xy (tension positive)", True),
+    Field("x", VECTOR, "m", "position", True),
+    Field("v", VECTOR, "m/s", "velocity", True),
+    Field("stress", STRESS, "Pa", "effective stress xx, yy, zz, xy[, yz, zx] (tension "
+          "positive)", True),
     Field("p", 1, "Pa", "pore-water pressure (compression positive)", True),
     Field("p_prev", 1, "Pa", "pore pressure one step back, for TPI Eq. (39)", True),
     Field("poro", 1, "1", "porosity n", True),
-    Field("vol", 1, "m^2", "particle volume per unit thickness", True),
+    Field("vol", 1, "m^2", "particle volume (per unit thickness in 2D; m^3 in 3D)", True),
     Field("rho", 1, "kg/m^3", "mixture density (1 - n) rho_s + n rho_l", True),
     Field("perm", 1, "m/s", "hydraulic conductivity k", True),
-    Field("acc", 2, "m/s^2", "acceleration of the last step", True),
+    Field("acc", VECTOR, "m/s^2", "acceleration of the last step", True),
     Field("dp_prev", 1, "Pa", "pressure increment p^(n-1) - p^(n-2), the projection's "
           "second-order warm start (pressure_solve.py)", False),
-    Field("u", 2, "m", "displacement from the initial position", False),
+    Field("u", VECTOR, "m", "displacement from the initial position", False),
     Field("poro0", 1, "1", "initial porosity", False),
     Field("vol0", 1, "m^2", "initial volume", False),
     Field("eps_p", 1, "1", "equivalent plastic strain", False),
@@ -45,11 +51,20 @@ FIELDS: tuple[Field, ...] = (
     Field("drained_from", 1, "s", "time from which p = 0 is imposed (inf: never)", False),
     Field("surface", 1, "1", "1 on the loaded surface layer (settlement diagnostics)", False),
     Field("load_index", 1, "1", "index of the surface load acting on the particle, or -1", False),
-    Field("traction", 2, "m", "outward tributary area vector -n dA of a loaded particle", False),
+    Field("traction", VECTOR, "m", "outward tributary area vector -n dA of a loaded particle", False),
     Field("material", 1, "1", "index of the particle's material in the scene's list "
           "(0: the one [material], or the first of [[materials]]; issue 16)", False),
 )
 
+
+
+def fields_of_dim(dim: int) -> tuple[Field, ...]:
+    """The fields with their component counts in `dim` dimensions."""
+    width = {VECTOR: dim, STRESS: 4 if dim == 2 else 6}
+    return tuple(replace(f, ncomp=width.get(f.ncomp, f.ncomp)) for f in _FIELDS)
+
+
+FIELDS = fields_of_dim(2)
 FIELD_BY_NAME = {f.name: f for f in FIELDS}
 # fields added after checkpoint format 1 was fixed: zero when an older checkpoint lacks them
 ADDED_FIELDS = ("dp_prev", "material", "plastic_work")
@@ -59,7 +74,9 @@ NEIGHBOUR_FIELDS = tuple(f.name for f in FIELDS if f.neighbour)
 class ParticleStore:
     """Owns the arrays; exposes them as attributes (`store.p`, `store.x`, ...)."""
 
-    def __init__(self, capacity: int):
+    def __init__(self, capacity: int, dim: int = 2):
+        self.dim = dim
+        self.fields = fields_of_dim(dim)
         self.cap = 0
         self.n_owned = 0
         self.n_halo = 0
@@ -71,7 +88,7 @@ class ParticleStore:
         old = self.arrays
         n_keep = self.n_owned + self.n_halo + self.n_ghost
         self.arrays = {}
-        for f in FIELDS:
+        for f in self.fields:
             shape = (cap,) if f.ncomp == 1 else (cap, f.ncomp)
             a = np.zeros(shape)
             if f.name in old:
@@ -79,9 +96,9 @@ class ParticleStore:
             self.arrays[f.name] = a
             setattr(self, f.name, a)
         self.cap = cap
-        self.all_rows = tuple(self._as2d(f.name) for f in FIELDS)
+        self.all_rows = tuple(self._as2d(f.name) for f in self.fields)
         self.neighbour_rows = tuple(self._as2d(n) for n in NEIGHBOUR_FIELDS)
-        self.row_width = sum(f.ncomp for f in FIELDS)
+        self.row_width = sum(f.ncomp for f in self.fields)
 
     def _as2d(self, name: str) -> np.ndarray:
         a = self.arrays[name]
