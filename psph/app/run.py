@@ -383,8 +383,10 @@ def _history_row(sim: Simulation, probes: dict[str, tuple[int, tuple]]) -> dict:
     st = sim.store
     n = st.n_owned
     surf = st.surface[:n] > 0
-    local = np.zeros(3 + 3 * len(probes))
-    local[0] = -st.u[:n, 1][surf].sum()
+    dim = sim.dim
+    w = 1 + dim  # p and u of a probe
+    local = np.zeros(3 + w * len(probes))
+    local[0] = -st.u[:n, dim - 1][surf].sum()
     local[1] = float(surf.sum())
     local[2] = 0.5 * np.sum(st.rho[:n] * st.vol[:n] * np.sum(st.v[:n] ** 2, axis=1))
     keys = st.key[:n]
@@ -392,7 +394,8 @@ def _history_row(sim: Simulation, probes: dict[str, tuple[int, tuple]]) -> dict:
         hit = np.flatnonzero(keys == pid)
         if len(hit):
             i = hit[0]
-            local[3 + 3 * k:6 + 3 * k] = (st.p[i], st.u[i, 0], st.u[i, 1])
+            local[3 + w * k] = st.p[i]
+            local[4 + w * k:3 + w * (k + 1)] = st.u[i]
     tot = sim.slabs.allreduce_sum(local)
     pmax = sim.slabs.allreduce_max(float(np.max(st.p[:n])) if n else -math.inf)
     pmin = -sim.slabs.allreduce_max(float(-np.min(st.p[:n])) if n else -math.inf)
@@ -407,9 +410,9 @@ def _history_row(sim: Simulation, probes: dict[str, tuple[int, tuple]]) -> dict:
         # the same measure at the explicit / TPI pressure (0 before the first step)
         row["mass_balance_residual"] = sim.mass_balance_residual() if sim.step > 0 else 0.0
     for k, name in enumerate(probes):
-        row[f"p_{name}"] = tot[3 + 3 * k]
-        row[f"ux_{name}"] = tot[4 + 3 * k]
-        row[f"uy_{name}"] = tot[5 + 3 * k]
+        row[f"p_{name}"] = tot[3 + w * k]
+        for d in range(dim):
+            row[f"u{'xyz'[d]}_{name}"] = tot[4 + w * k + d]
     return row
 
 

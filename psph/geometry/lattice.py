@@ -42,11 +42,26 @@ class SerialReducer:
 SERIAL = SerialReducer()
 
 
-def lattice_axes(lo, hi, dx: float) -> tuple[np.ndarray, np.ndarray]:
-    """The x and y centres of `lattice_block(lo, hi, dx)` (the same floats)."""
-    nx = max(int(round((hi[0] - lo[0]) / dx)), 1)
-    ny = max(int(round((hi[1] - lo[1]) / dx)), 1)
-    return lo[0] + (np.arange(nx) + 0.5) * dx, lo[1] + (np.arange(ny) + 0.5) * dx
+def lattice_axes(lo, hi, dx: float) -> tuple[np.ndarray, ...]:
+    """The lattice centres along each axis of the box [lo, hi] (x, y and, in 3D, z)."""
+    return tuple(lo[d] + (np.arange(max(int(round((hi[d] - lo[d]) / dx)), 1)) + 0.5) * dx
+                 for d in range(len(lo)))
+
+
+def _block_rows(c: tuple[np.ndarray, ...], idx: list[np.ndarray]) -> tuple[np.ndarray, ...]:
+    """Positions (n, dim) and lattice indices (n,) of the block lattice points c[d][idx[d]]
+    in the block's row-major order (x fastest, then y, then z)."""
+    dim = len(c)
+    rev = range(dim - 1, -1, -1)
+    grids = np.meshgrid(*[c[d][idx[d]] for d in rev], indexing="ij")
+    points = np.column_stack([grids[dim - 1 - d].ravel() for d in range(dim)])
+    index = np.meshgrid(*[idx[d] for d in rev], indexing="ij")
+    key = np.zeros(points.shape[0], np.int64)
+    stride = 1
+    for d in range(dim):
+        key += index[dim - 1 - d].ravel() * stride
+        stride *= len(c[d])
+    return points, key
 
 
 class Fill:
@@ -125,7 +140,8 @@ def census(scene, axis: int, reducer=SERIAL) -> tuple[np.ndarray, np.ndarray]:
     for b in scene.particles.blocks:
         c = lattice_axes(b.min, b.max, dx)
         values.append(c[axis])
-        counts.append(np.full(len(c[axis]), len(c[1 - axis]), np.int64))
+        across = int(np.prod([len(c[d]) for d in range(len(c)) if d != axis]))
+        counts.append(np.full(len(c[axis]), across, np.int64))
     fill = Fill(scene)
     if not fill.empty:
         c = lattice_axes(scene.domain.min, scene.domain.max, dx)
@@ -150,7 +166,7 @@ def _in_slab(c: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
          reducer=SERIAL, material: bool = False) -> tuple[np.ndarray, ...]:
-    """Positions (n, 2) and global ids (n,) int64 of the particles whose coordinate along
+    """Positions (n, dim) and global ids (n,) int64 of the particles whose coordinate along
     `axis` lies in [lo, hi), in id order (collective: two reductions of the fill's per-row
     counts). The default slab is the whole scene on one process. `material`: also each
     particle's material index (n,) float64, that of its source (`Fill.material`)."""
@@ -159,12 +175,13 @@ def seed(scene, axis: int = 0, lo: float = -np.inf, hi: float = np.inf,
     offset = 0
     for b in scene.particles.blocks:
         c = lattice_axes(b.min, b.max, dx)
-        idx = [np.arange(len(c[0])), np.arange(len(c[1]))]
+        idx = [np.arange(len(cd)) for cd in c]
         idx[axis] = _in_slab(c[axis], lo, hi)
-        xs_out.append(_grid(c[0][idx[0]], c[1][idx[1]]))
-        keys.append((offset + idx[1][:, None] * len(c[0]) + idx[0][None, :]).ravel())
+        points, key = _block_rows(c, idx)
+        xs_out.append(points)
+        keys.append(offset + key)
         mats.append(np.full(len(keys[-1]), float(material_index(scene, b.material))))
-        offset += len(c[0]) * len(c[1])
+        offset += int(np.prod([len(cd) for cd in c]))
     fill = Fill(scene)
     if not fill.empty:
         xs, ys = lattice_axes(scene.domain.min, scene.domain.max, dx)

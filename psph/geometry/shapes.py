@@ -17,12 +17,14 @@ def lattice_block(lo, hi, dx: float) -> np.ndarray:
 
 def surface_layer(x: np.ndarray, side: str, dx: float, bounds: np.ndarray | None = None
                   ) -> np.ndarray:
-    """Mask of the outermost particle layer on `side` (left, right, bottom, top).
-    `bounds` (2, dim): the smallest and largest coordinates of all particles, when `x`
-    holds only some of them (default: those of `x`)."""
-    axis = 0 if side in ("left", "right") else 1
+    """Mask of the outermost particle layer on `side` (left, right, bottom, top; front,
+    back in 3D, where bottom and top are along z). `bounds` (2, dim): the smallest and
+    largest coordinates of all particles, when `x` holds only some of them (default:
+    those of `x`)."""
+    dim = x.shape[1]
+    axis = 0 if side in ("left", "right") else 1 if side in ("front", "back") else dim - 1
     c = x[:, axis]
-    if side in ("right", "top"):
+    if side in ("right", "back", "top"):
         return c > (c.max() if bounds is None else bounds[1, axis]) - 0.5 * dx
     return c < (c.min() if bounds is None else bounds[0, axis]) + 0.5 * dx
 

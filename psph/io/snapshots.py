@@ -20,7 +20,8 @@ SNAPSHOT_FIELDS = {
     "stress": ("Pa", "effective stress xx, yy, zz, xy, yz, zx, tension positive"),
     "eps_p": ("1", "equivalent plastic strain"),
     "plastic_work": ("J/m^3", "dissipated plastic work sigma' : d eps_p, accumulated"),
-    "vol": ("m^2", "particle volume per unit thickness (sum plastic_work vol: J/m)"),
+    "vol": ("m^2", "particle volume: per unit thickness in 2D (sum plastic_work vol: J/m), "
+            "m^3 in 3D"),
     "material": ("1", "index of the particle's material (0: [material] or the first of "
                  "[[materials]], in scene order)"),
 }
@@ -29,8 +30,8 @@ SNAPSHOT_FIELDS = {
 def snapshot_arrays(store) -> dict[str, np.ndarray]:
     """The owned particles' output fields (copies, in output layout)."""
     n = store.n_owned
-    stress6 = np.zeros((n, 6))
-    stress6[:, :4] = store.stress[:n]
+    stress6 = np.zeros((n, 6))  # 2D: xx, yy, zz, xy with yz = zx = 0
+    stress6[:, :store.stress.shape[1]] = store.stress[:n]
     return {
         "id": store.key[:n].astype(np.int64),
         "x": store.x[:n].copy(),

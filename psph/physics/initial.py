@@ -7,12 +7,20 @@ import math
 
 import numpy as np
 
+from psph.config.boundaries import side_planes
 from psph.geometry.lattice import SERIAL, extent, seed
 from psph.geometry.profiles import read_profile
 from psph.geometry.shapes import surface_layer
 from psph.physics.material import lame
 
-_NORMALS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
+
+
+def outward_normal(side: str, dim: int) -> np.ndarray:
+    """The outward unit normal of a box side (`config.boundaries.side_planes`)."""
+    axis, _, sign = side_planes(dim)[side]
+    normal = np.zeros(dim)
+    normal[axis] = -sign
+    return normal
 
 
 def soil_positions(scene) -> np.ndarray:
@@ -37,13 +45,14 @@ def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | No
     lo, hi: coordinate along axis in [lo, hi)), default all of them. Collective over the
     ranks of `reducer` (each passing its own slab)."""
     dx = scene.particles.dx
+    dim = scene.dim
     x, key, material = seed(scene, *(slab or ()), reducer=reducer, material=True)
     bounds = extent(x, reducer)
     n = len(x)
     m = scene.material  # the pore fluid (one for every material)
     per = material_arrays(scene, material)
     poro = per["porosity"]
-    vol = np.full(n, dx * dx)
+    vol = np.full(n, dx * dx if dim == 2 else dx * dx * dx)
     # a dry scene (no pore-pressure stages) has empty pores
     rho = (1 - poro) * per["rho_s"] + \
         (poro * m.rho_l if scene.pressure.scheme != "none" else 0.0)
@@ -59,10 +68,10 @@ def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | No
         "material": material,
         "drained_from": np.full(n, math.inf),
         "load_index": np.full(n, -1.0),
-        "traction": np.zeros((n, 2)),
+        "traction": np.zeros((n, dim)),
         "surface": np.zeros(n),
     }
-    for side in ("left", "right", "bottom", "top"):
+    for side in side_planes(dim):
         b = getattr(scene.boundaries, side)
         if b.flow == "drained":
             layer = surface_layer(x, side, dx, bounds)
@@ -73,9 +82,9 @@ def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | No
         if load.range is not None:
             along = x[:, 1] if load.side in ("left", "right") else x[:, 0]
             layer &= (along >= load.range[0]) & (along <= load.range[1])
-        normal = np.array(_NORMALS[load.side])
         data["load_index"][layer] = i
-        data["traction"][layer] = -normal * dx  # pressure pushes inward over length dx
+        # the pressure pushes inward over the particle's face, dx (dx^2 in 3D)
+        data["traction"][layer] = -outward_normal(load.side, dim) * dx ** (dim - 1)
         data["surface"][layer] = 1.0
     geostatic(scene, data, reducer, bounds)
     if scene.initial.undrained_load:
@@ -133,23 +142,29 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
     smallest and largest x and the column tops of all of them.
     """
     init = scene.initial
+    if init.water_table is None and init.k0 is None:
+        return
     n = len(data["key"])
-    g = -scene.gravity[1]
     x = data["x"]
+    vz = x.shape[1] - 1  # the vertical axis: y in 2D, z in 3D
+    g = -scene.gravity[vz]
     dx = scene.particles.dx
     # lattice columns: x = x_min + k dx (rounding x / dx itself would merge neighbouring
-    # columns, whose centres sit at half-integers, and shift p by rho_l g dx)
+    # columns, whose centres sit at half-integers, and shift p by rho_l g dx); in 3D the
+    # columns of the (x, y) lattice
     if bounds is None:
         bounds = extent(x, reducer)
-    x_min, x_max = bounds[0, 0], bounds[1, 0]
-    column = np.round((x[:, 0] - x_min) / dx).astype(np.int64)
-    top = np.full(int(np.round((x_max - x_min) / dx)) + 1, -np.inf)
-    np.maximum.at(top, column, x[:, 1])
+    x_min, x_max = bounds[0, :vz], bounds[1, :vz]
+    k = np.round((x[:, :vz] - x_min) / dx).astype(np.int64)
+    shape = tuple(int(m) for m in np.round((x_max - x_min) / dx).astype(np.int64) + 1)
+    column = k[:, 0] if vz == 1 else np.ravel_multi_index(k.T, shape)
+    top = np.full(int(np.prod(shape)), -np.inf)
+    np.maximum.at(top, column, x[:, vz])
     top = reducer.max(top)
-    depth = top[column] + 0.5 * dx - x[:, 1]
+    depth = top[column] + 0.5 * dx - x[:, vz]
     if init.water_table is not None:
         head = depth - 0.5 * dx if init.water_table == "surface" \
-            else table_elevation(init.water_table, x[:, 0]) - x[:, 1]
+            else table_elevation(init.water_table, x[:, 0]) - x[:, vz]
         p = scene.material.rho_l * g * np.maximum(head, 0.0)
         if scene.pressure.drained_boundary == "layer":
             p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0),
@@ -159,12 +174,11 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
     if init.k0 is not None:
         sigma_v = -data["rho"] * g * depth
         if len(scene.material_list) > 1:
-            sigma_v -= g * overburden(data["rho"], x[:, 1], column, len(top), dx, reducer)
+            sigma_v -= g * overburden(data["rho"], x[:, vz], column, len(top), dx, reducer)
         sigma_v += data.get("p", np.zeros(n))
-        stress = np.zeros((n, 4))
-        stress[:, 0] = init.k0 * sigma_v
-        stress[:, 1] = sigma_v
-        stress[:, 2] = init.k0 * sigma_v
+        stress = np.zeros((n, 4 if vz == 1 else 6))
+        stress[:, :3] = init.k0 * sigma_v
+        stress[:, vz] = sigma_v
         data["stress"] = stress
 
 

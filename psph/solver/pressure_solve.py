@@ -15,14 +15,12 @@ from psph.kernels.laplacian import (
     fixed_rhs,
     operator_coefficients,
     operator_diagonal,
-    pair_weights,
 )
 from psph.kernels.pcg_serial import pcg_serial
 from psph.kernels.projection import (
     imposed_increments,
     mirror_to_ghosts,
     pressure_correction,
-    projection_rhs,
 )
 from psph.solver.exact_dots import ExactDots
 from psph.solver.pcg import PCGResult, PCGWork, pcg
@@ -47,10 +45,11 @@ class PressureSolve:
     def _arrays(self, cap: int, n_pairs: int) -> dict:
         a = self._a
         if a.get("cap", 0) < cap:
+            dim = self.sim.dim
             a.update(cap=cap, storage=np.zeros(cap), rhs=np.zeros(cap), diag=np.zeros(cap),
                      dp=np.zeros((cap, 1)), imposed=np.zeros((cap, 2)),
-                     fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, 2)),
-                     acc=np.zeros((cap, 2)), c_storage=np.zeros(cap))
+                     fixed=np.zeros(cap, np.bool_), dv=np.zeros((cap, dim)),
+                     acc=np.zeros((cap, dim)), c_storage=np.zeros(cap))
         if "w" not in a or a["w"].shape[0] < n_pairs:
             m = max(n_pairs, self.sim.pairs.shape[0])
             a.update(w=np.zeros(m), w_diag=np.zeros(m), w_off=np.zeros(m), c_diag=np.zeros(m),
@@ -67,8 +66,8 @@ class PressureSolve:
         # both parts normalised by the lattice moment, as the Darcy sums and the stress
         # divergence of the step (`Simulation._interactions`)
         k_scale = sim.lattice_norm / sim.soil.gamma_l
-        pair_weights(sim.n_pairs, sim.pairs, sim.pair_g, st.x, st.perm, st.rho, k_scale,
-                     sim.dt * sim.lattice_norm, w)
+        sim.kernels.pair_weights(sim.n_pairs, sim.pairs, sim.pair_g, st.x, st.perm, st.rho,
+                                 k_scale, sim.dt * sim.lattice_norm, w)
         if not sim.drainage.has_planes:
             return w, w
         image_weights(st.n_owned, sim.n_pairs, sim.pairs, st.x, st.perm, st.rho, st.vol,
@@ -87,8 +86,9 @@ class PressureSolve:
         n, npairs = st.n_owned, sim.n_pairs
         a = self._arrays(st.cap, npairs)
         imposed, fixed = a["imposed"], a["fixed"]
-        projection_rhs(n, sim.sums, p, st.perm, st.vol, st.poro, s.rho_l, sim.body[0],
-                       sim.body[1], s.gamma_l, s.K_l, sim.dt, a["storage"], a["rhs"])
+        sim.kernels.projection_rhs(n, sim.sums, p, st.perm, st.vol, st.poro, s.rho_l,
+                                   sim.body[0], sim.body[1], s.gamma_l, s.K_l, sim.dt,
+                                   a["storage"], a["rhs"], sim.b2)
         wd, wo = self._weights(a)
         imposed_increments(n, sim.sums, st.drained_from, sim.drainage.layer_clock(t),
                            sim.ponding == 2, p, imposed)

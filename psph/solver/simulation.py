@@ -19,8 +19,8 @@ from psph.errors import NumericalError
 from psph.geometry.lattice import extent, seed
 from psph.geometry.shapes import inside_polygon
 from psph.kernels.laplacian import lattice_moment
-from psph.kernels.spline import w_cubic
-from psph.kernels.sum_columns import NSUMS
+from psph.kernels.spline import w_cubic, w_cubic_dim
+from psph.kernels.sum_columns import sum_layout
 from psph.kernels.update import (
     SCHEME_EXPLICIT,
     SCHEME_NONE,
@@ -38,6 +38,7 @@ from psph.physics.material import (
 from psph.physics.softening import nonlocal_softening
 from psph.solver.boundary import PolylineBoundaries, halo_width
 from psph.solver.drainage import Drainage
+from psph.solver.kernel_set import kernels_for
 from psph.solver.pressure_solve import PressureSolve
 from psph.solver.stages import Stage, Stages
 from psph.solver.stepping import time_stepping
@@ -58,6 +59,8 @@ class Simulation(Stages):
         `removals_done`: how many `remove` regions were applied already. Collective."""
         self.scene = scene
         self.slabs = slabs
+        self.dim = dim = scene.dim
+        self.kernels = kernels_for(dim)
         self.soil = soil_from_scene(scene)
         self.h = scene.h
         self.stepping = time_stepping(scene)
@@ -74,7 +77,7 @@ class Simulation(Stages):
         self.n_ids = self.census.n_ids
         self.removals = sorted(scene.remove, key=lambda r: r.at)
         self.removals_done = removals_done
-        self.store = ParticleStore(2 * n_local + 256)
+        self.store = ParticleStore(2 * n_local + 256, dim)
         self.store.load(data)
         if fresh:
             self.store.u[:] = 0.0
@@ -89,7 +92,7 @@ class Simulation(Stages):
         self.polylines = PolylineBoundaries(scene, float(self.n_ids) * (1 + nw + nw * nw)) \
             if scene.boundaries.polylines else None
         self.halo = halo_width(scene)
-        self._v_slip = np.zeros((0, 2)) if self.wall_fixed.any() or self.polylines else None
+        self._v_slip = np.zeros((0, dim)) if self.wall_fixed.any() or self.polylines else None
         self.ghost_src = np.zeros(0, np.int64)
         self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
         # the initial lattice's extent, also on a restart (x - u of a checkpoint is not
@@ -101,33 +104,41 @@ class Simulation(Stages):
         self.solve = self.pressure_solve.stats
 
         margin = 2.0 * self.h
-        self.box = np.array([lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin])
+        self.box = np.array([c - margin for c in lo] + [c + margin for c in hi])
         self.cell_size = 2.0 * self.h
         self.softening = nonlocal_softening(scene, self.cell_size, self.wall_axis,
                                             self.wall_pos)  # None: local softening
         self.origin = np.array(lo, float) - 4.0 * self.cell_size
         span = np.array(hi, float) - np.array(lo, float)
         self.cell_max = (np.ceil(span / self.cell_size) + 8).astype(np.int64)
-        self.grid_lo = np.zeros(2, np.int64)
-        self.ncell = np.zeros(2, np.int64)
+        self.grid_lo = np.zeros(dim, np.int64)
+        self.ncell = np.zeros(dim, np.int64)
         self.cell_start = np.zeros(1024, np.int64)
         self.fill = np.zeros(1024, np.int64)
         self.cell_of = np.zeros(self.store.cap, np.int64)
         self.order = np.zeros(self.store.cap, np.int64)
-        self.sums = np.zeros((self.store.cap, NSUMS))
-        self.astress = np.zeros((1, 3))
-        self.w_dx = w_cubic(scene.particles.dx, self.h)
-        self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h)  # F~ of Eq. (23)
+        lay = self.layout = sum_layout(dim)
+        # the Darcy sums (Q .. SUM_APSI) and the stress divergence, scaled by the lattice
+        # moment after the sweep (`Stages._interactions`)
+        self.darcy_columns = slice(lay.Q, lay.SUM_APSI + 1)
+        self.dvdt_columns = slice(lay.DVDT, lay.DVDT + dim)
+        self.sums = np.zeros((self.store.cap, lay.NSUMS))
+        self.astress = np.zeros((1, 3 if dim == 2 else 6))
+        self.w_dx = w_cubic(scene.particles.dx, self.h) if dim == 2 else \
+            w_cubic_dim(scene.particles.dx, self.h, dim)
+        # F~ of Eq. (23)
+        self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h, dim)
         self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
         self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
         self.scratch_shift = np.zeros((0, 5))  # grad C, the shift and 1/2 of `_shift`
         self.load_value = np.zeros(max(len(scene.loads), 1))
 
         g = scene.gravity
-        self.body = (float(g[0]), float(g[1]))
+        self.body = tuple(float(c) for c in g)  # (b0, b1[, b2])
+        self.b2 = self.body[2] if dim == 3 else 0.0
         self.body_force = np.array(self.body)  # for the ghosts' wall-normal stress (ghosts.py)
         self.head_b = self.soil.rho_l * np.array(self.body) if scene.pressure.scheme != "none" \
-            else np.zeros(2)
+            else np.zeros(dim)
         # several materials (issue 16): a row per material, indexed by the particle's
         # `material`; damping and the viscosity's sound speed from the stiffest one
         self.mat = material_table(scene)
@@ -152,7 +163,7 @@ class Simulation(Stages):
         self.record_pairs = self.symplectic or self.coupled or self.shifting > 0.0
         n_pairs0 = 16 * self.store.cap if self.record_pairs else 0
         self.pairs = np.zeros((n_pairs0, 2), np.int64)
-        self.pair_g = np.zeros((n_pairs0, 2))
+        self.pair_g = np.zeros((n_pairs0, dim))
         self.n_pairs = 0
         self.dt, self.scheme = self.stepping.at(0.0)
         self.bad_particle = -1

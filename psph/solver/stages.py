@@ -19,12 +19,7 @@ from psph.kernels.bundles import (
     fields_of,
 )
 from psph.kernels.ghosts import make_ghosts, wall_contact
-from psph.kernels.images import image_sums
-from psph.kernels.interactions import (
-    pair_sums,
-    symmetric_gradient_sums,
-    velocity_gradient_sums,
-)
+from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.neighbours import bin_particles, grid_bounds
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.shifting import (
@@ -33,12 +28,9 @@ from psph.kernels.shifting import (
     SURFACE_TRACE,
     shift_particles,
 )
-from psph.kernels.sum_columns import DARCY, DVDT, NSUMS
 from psph.kernels.update import (
     SCHEME_PROJECTION,
     SCHEME_TPI,
-    advance,
-    kick,
     pore_pressure_force,
     porosity_follows_pressure_filter,
     porosity_follows_stress_filter,
@@ -78,7 +70,7 @@ class Stages:
         if self._v_slip is None:
             return self.store.v
         if self._v_slip.shape[0] < self.store.cap:
-            self._v_slip = np.zeros((self.store.cap, 2))
+            self._v_slip = np.zeros((self.store.cap, self.dim))
         return self._v_slip
 
     def _ghosts(self) -> None:
@@ -124,10 +116,10 @@ class Stages:
         if self.cell_of.shape[0] < st.cap:
             self.cell_of = np.zeros(st.cap, np.int64)
             self.order = np.zeros(st.cap, np.int64)
-            self.sums = np.zeros((st.cap, NSUMS))
+            self.sums = np.zeros((st.cap, self.layout.NSUMS))
         grid_bounds(st.x, n, self.origin, self.cell_size, self.cell_max, self.grid_lo,
                     self.ncell)
-        nc = int(self.ncell[0] * self.ncell[1])
+        nc = int(np.prod(self.ncell))
         if self.cell_start.shape[0] < nc + 1:
             self.cell_start = np.zeros(2 * nc + 1, np.int64)
             self.fill = np.zeros(2 * nc + 1, np.int64)
@@ -186,28 +178,30 @@ class Stages:
         as_n = 0.0
         if sb.artificial_stress > 0.0:
             if self.astress.shape[0] < st.cap:
-                self.astress = np.zeros((st.cap, 3))
+                self.astress = np.zeros((st.cap, self.astress.shape[1]))
             artificial_stress(st.n_total, st.stress, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
         fields = fields_of(PairFields, st.arrays, v_slip=self.v_slip, astress=self.astress)
         cells = Cells(self.cell_start, self.order, self.ncell)
         par = PairParams(self.h, alpha, sb.av_alpha, sb.av_beta, self.av_sound_speed,
                          rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
-                         as_n, self.w_dx, self.p_weight, self.record_pairs).typed()
+                         as_n, self.w_dx, self.p_weight, self.record_pairs,
+                         rl * self.b2).typed()
         while True:
-            n = pair_sums(st.n_total, st.n_owned, st.n_real, fields, cells, par, self.sums,
+            n = self.kernels.pair_sums(st.n_total, st.n_owned, st.n_real, fields, cells, par, self.sums,
                           PairRecord(self.pairs, self.pair_g))
             if n >= 0:
                 self.n_pairs = n
                 if self.coupled and self.drainage.has_planes:
-                    image_sums(st.n_owned, n, self.pairs, st.x, st.p, st.p_prev, st.vol,
-                               st.perm, self.drainage.planes, self.h, alpha, rl * self.body[0],
-                               rl * self.body[1], self.sums)
+                    self.kernels.image_sums(st.n_owned, n, self.pairs, st.x, st.p, st.p_prev,
+                                            st.vol, st.perm, self.drainage.planes, self.h,
+                                            alpha, rl * self.body[0], rl * self.body[1],
+                                            self.sums, rl * self.b2)
                 if self.coupled:
-                    self.sums[:st.n_owned, DARCY] *= self.lattice_norm
+                    self.sums[:st.n_owned, self.darcy_columns] *= self.lattice_norm
                 # the stress divergence of Eq. (26) has the same lattice moment: a
                 # uniform stress under a surface load balanced m0 q, not q (README)
-                self.sums[:st.n_owned, DVDT] *= self.lattice_norm
+                self.sums[:st.n_owned, self.dvdt_columns] *= self.lattice_norm
                 if self.p_weight < 1.0:
                     pore_pressure_force(st.n_owned, self.sums, st.rho,
                                         self.scene.pressure.momentum == "gradient",
@@ -215,19 +209,21 @@ class Stages:
                 return
             grow = 2 * self.pairs.shape[0]
             self.pairs = np.zeros((grow, 2), np.int64)
-            self.pair_g = np.zeros((grow, 2))
+            self.pair_g = np.zeros((grow, self.dim))
 
     def _kick(self) -> None:
         """Symplectic step: v^(n+1) from the accelerations of step n, copied to the halo
         and the wall ghosts, then the velocity sums again from v^(n+1)."""
         st = self.store
         load_values(self.scene.loads, self.t, self.load_value)
-        kick(st.n_owned, self.sums, st.v, st.acc, st.rho, st.vol, st.load_index, st.traction,
-             self.load_value, self.body[0], self.body[1], self.damping, self.dt)
+        self.kernels.kick(st.n_owned, self.sums, st.v, st.acc, st.rho, st.vol, st.load_index,
+                          st.traction, self.load_value, self.body[0], self.body[1],
+                          self.damping, self.dt, self.b2)
         self.slabs.refresh_halo(st.v)
         self._refresh_walls()
-        velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g, st.v,
-                               self.v_slip, st.poro, st.vol, self.coupled, self.sums)
+        self.kernels.velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs,
+                                            self.pair_g, st.v, self.v_slip, st.poro, st.vol,
+                                            self.coupled, self.sums)
 
     def _update(self) -> None:
         st = self.store
@@ -237,8 +233,8 @@ class Stages:
                          self.body[0], self.body[1], self.damping, self.scheme,
                          self.scene.pressure.beta, self.acc_term,
                          self.scene.stabilisation.corrected_strain_rate, self.plastic,
-                         self.ponding, self.symplectic).typed()
-        bad = advance(st.n_owned, self.sums, fields_of(UpdateFields, st.arrays),
+                         self.ponding, self.symplectic, self.b2).typed()
+        bad = self.kernels.advance(st.n_owned, self.sums, fields_of(UpdateFields, st.arrays),
                       SurfaceLoads(st.load_index, st.traction, self.load_value), self.mat,
                       self.softening.eps_hat if self.softening else st.eps_p, self.box, par)
         if bad >= 0 and self.failure is None:  # named before any wall moves it back
@@ -287,8 +283,9 @@ class Stages:
         st = self.store
         self.slabs.refresh_halo(st.v, st.p, st.p_prev)
         self._refresh_walls()
-        velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs, self.pair_g,
-                               st.v, self.v_slip, st.poro, st.vol, self.coupled, self.sums)
+        self.kernels.velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs,
+                                            self.pair_g, st.v, self.v_slip, st.poro, st.vol,
+                                            self.coupled, self.sums)
 
 
 def _bad_field(st: ParticleStore, i: int) -> str:

@@ -15,7 +15,8 @@ class TerzaghiMonitor:
         self.ref = terzaghi.from_scene(scene)
         self.slabs = slabs
         self.tvs = list(scene.verification.tv)
-        self.top = max(b.max[1] for b in scene.particles.blocks)
+        self.vz = scene.dim - 1  # the vertical axis
+        self.top = max(b.max[self.vz] for b in scene.particles.blocks)
         self.pressure_errors: dict[str, dict] = {}
         self.settlement_error = 0.0
         self.settlement_at_max = None
@@ -39,7 +40,7 @@ class TerzaghiMonitor:
             return
         st = sim.store
         n = st.n_owned
-        depth = self.top - (st.x[:n, 1] - st.u[:n, 1])
+        depth = self.top - (st.x[:n, self.vz] - st.u[:n, self.vz])
         pa = self.ref.pressure(depth, sim.t)
         local = float(np.max(np.abs(st.p[:n] - pa))) if n else 0.0
         err = self.slabs.allreduce_max(local) / self.ref.load

@@ -116,7 +116,8 @@ def from_scene(scene) -> Terzaghi:
     drainage, t_drain = column_drainage(scene)
     load = scene.loads[0]
     blocks = scene.particles.blocks
-    height = max(b.max[1] for b in blocks) - min(b.min[1] for b in blocks)
+    vz = scene.dim - 1  # the vertical axis
+    height = max(b.max[vz] for b in blocks) - min(b.min[vz] for b in blocks)
     return Terzaghi(height=height, load=load.pressure, modulus=modulus, porosity=m.porosity,
                     bulk_water=m.K_l, conductivity=m.k, gamma_l=m.rho_l * m.g_ref,
                     t_drain=t_drain, drainage=drainage)
