@@ -14,6 +14,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from psph.errors import SceneRule
+from psph.geometry.box import side_planes
 from psph.geometry.profiles import ProfileError, read_profile
 
 
@@ -110,24 +111,10 @@ class Boundaries(_Model):
         return self
 
 
-# side -> (axis, which end of the domain (0 min, 1 max), sign: +1 soil at larger x[axis])
-SIDE_PLANES = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
-              "bottom": (1, 0, 1.0), "top": (1, 1, -1.0)}
-# in 3D the vertical is z: bottom and top are planes of z, front and back of y
-SIDE_PLANES_3D = {"left": (0, 0, 1.0), "right": (0, 1, -1.0),
-                  "front": (1, 0, 1.0), "back": (1, 1, -1.0),
-                  "bottom": (2, 0, 1.0), "top": (2, 1, -1.0)}
-
-
-def side_planes(dim: int) -> dict[str, tuple[int, int, float]]:
-    """The box sides of a `dim`-dimensional domain: (axis, end, sign) by name."""
-    return SIDE_PLANES if dim == 2 else SIDE_PLANES_3D
-
-
 class PlaneWalls(NamedTuple):
     """The sides of the domain box that are walls (motion not "free"), in the order left,
-    right, (front, back,) bottom, top: the plane x[axis] = pos, the sign of the soil's side, fixed or
-    free-slip."""
+    right, (front, back,) bottom, top: the plane x[axis] = pos, the sign of the soil's
+    side, fixed or free-slip."""
 
     sides: list[str]
     axis: np.ndarray

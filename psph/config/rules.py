@@ -6,9 +6,9 @@ exit 2."""
 import math
 from pathlib import Path
 
-from psph.config.boundaries import side_planes
 from psph.config.materials import check_materials
 from psph.errors import SceneRule as _Rule
+from psph.geometry.box import side_planes
 from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
 from psph.physics.limits import (
     TPI_ALPHA_MAX,

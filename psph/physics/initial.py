@@ -7,20 +7,11 @@ import math
 
 import numpy as np
 
-from psph.config.boundaries import side_planes
+from psph.geometry.box import outward_normal, side_planes
 from psph.geometry.lattice import SERIAL, extent, seed
 from psph.geometry.profiles import read_profile
 from psph.geometry.shapes import surface_layer
 from psph.physics.material import lame
-
-
-
-def outward_normal(side: str, dim: int) -> np.ndarray:
-    """The outward unit normal of a box side (`config.boundaries.side_planes`)."""
-    axis, _, sign = side_planes(dim)[side]
-    normal = np.zeros(dim)
-    normal[axis] = -sign
-    return normal
 
 
 def soil_positions(scene) -> np.ndarray:

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from psph.config.boundaries import side_planes
+from psph.geometry.box import side_planes
 from psph.kernels.images import row_displacement
 from psph.solver.exact_dots import ExactDots
 

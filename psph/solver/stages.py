@@ -188,8 +188,8 @@ class Stages:
                          as_n, self.w_dx, self.p_weight, self.record_pairs,
                          rl * self.b2).typed()
         while True:
-            n = self.kernels.pair_sums(st.n_total, st.n_owned, st.n_real, fields, cells, par, self.sums,
-                          PairRecord(self.pairs, self.pair_g))
+            n = self.kernels.pair_sums(st.n_total, st.n_owned, st.n_real, fields, cells, par,
+                                       self.sums, PairRecord(self.pairs, self.pair_g))
             if n >= 0:
                 self.n_pairs = n
                 if self.coupled and self.drainage.has_planes:

@@ -51,7 +51,8 @@ _FIELDS: tuple[Field, ...] = (
     Field("drained_from", 1, "s", "time from which p = 0 is imposed (inf: never)", False),
     Field("surface", 1, "1", "1 on the loaded surface layer (settlement diagnostics)", False),
     Field("load_index", 1, "1", "index of the surface load acting on the particle, or -1", False),
-    Field("traction", VECTOR, "m", "outward tributary area vector -n dA of a loaded particle", False),
+    Field("traction", VECTOR, "m", "outward tributary area vector -n dA of a loaded particle",
+          False),
     Field("material", 1, "1", "index of the particle's material in the scene's list "
           "(0: the one [material], or the first of [[materials]]; issue 16)", False),
 )
