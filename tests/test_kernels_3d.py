@@ -4,6 +4,7 @@ of Eq. (23) over the pairs the cell lists find. The 2D cases stay those of
 `test_kernels.py`; here the 2D path of each generic kernel is also checked to be the 2D
 kernel's, bit for bit."""
 
+import itertools
 import math
 
 import numpy as np
@@ -416,6 +417,10 @@ def test_wall_ghosts_in_3d_at_a_corner():
                      perm, acc, key, head_b, z(3), src, sign)
     assert ng == 7 and np.all(src[1:8] == 0)
     assert len(set(key[:8].tolist())) == 8
+    # every combination of the three walls once: each edge mirrors the face ghost, not
+    # the corner made just before it (the edge across x and z was the corner's mirror)
+    assert {tuple(np.sign(x[g]) < 0) for g in range(1, 8)} == \
+        {f for f in itertools.product((False, True), repeat=3) if any(f)}
     for g in range(1, 8):
         flipped = np.sign(x[g]) < 0  # the walls this ghost is mirrored across
         assert np.allclose(np.abs(x[g]), x[0])

@@ -32,7 +32,7 @@ STOP_SIGNALS = (signal.SIGTERM, signal.SIGUSR1)
 
 def _slab_axis(scene: Scene) -> int:
     if scene.decomposition.axis != "auto":
-        return {"x": 0, "y": 1}[scene.decomposition.axis]
+        return {"x": 0, "y": 1, "z": 2}[scene.decomposition.axis]
     ext = np.subtract(scene.domain.max, scene.domain.min)
     return int(np.argmax(ext))
 

@@ -131,6 +131,8 @@ def check_dimension(scene) -> None:
             raise _Rule(key, v, f"needs {dim} components in a {dim}D scene (dim = {dim}; "
                         "a 3D scene gives [x, y, z], a 2D one [x, y])")
     b = scene.boundaries
+    if dim == 2 and scene.decomposition.axis == "z":
+        raise _Rule("decomposition.axis", "z", "3D only (a 2D scene cuts slabs along x or y)")
     if dim == 2:
         for side in ("front", "back"):
             if side in b.model_fields_set:

@@ -285,8 +285,9 @@ class Initial(_Model):
 
 
 class Decomposition(_Model):
-    axis: Literal["auto", "x", "y"] = Field(
-        "auto", description="Slab axis: \"auto\" (the domain's longer side), \"x\" or \"y\"")
+    axis: Literal["auto", "x", "y", "z"] = Field(
+        "auto", description="Slab axis: \"auto\" (the domain's longest side), \"x\", \"y\" "
+        "or, in 3D, \"z\"")
     rebalance_every: Annotated[int, Field(ge=0)] = Field(
         200, description="Steps between imbalance checks; 0 is never (the slabs stay as "
         "cut at the start)")

@@ -120,6 +120,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
             key[g] = key[j] + key_stride * (1 + w)
             src[g] = j
             src_sign[g] = -1.0 if wall_drained[w] else 1.0
+            gg = g  # the ghost across w: the edges across w and a second wall mirror it
             g += 1
             for w2 in range(w + 1, nw):
                 if wall_axis[w2] == wall_axis[w]:
@@ -129,13 +130,13 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                     continue
                 if g >= cap:
                     return -1
-                gg = g - 1
                 _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], wall_drained[w2],
                         x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b,
                         body)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 src[g] = j
                 src_sign[g] = src_sign[gg] * (-1.0 if wall_drained[w2] else 1.0)
+                ge = g  # the edge: a corner mirrors it across a third wall
                 g += 1
                 for w3 in range(w2 + 1, nw):
                     if wall_axis[w3] == wall_axis[w] or wall_axis[w3] == wall_axis[w2]:
@@ -145,7 +146,6 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                         continue
                     if g >= cap:
                         return -1
-                    ge = g - 1
                     _mirror(ge, g, wall_axis[w3], wall_pos[w3], wall_fixed[w3],
                             wall_drained[w3], x, v, v_slip, stress, p, p_prev, poro, vol, rho,
                             perm, acc, key, head_b, body)

@@ -1,0 +1,91 @@
+"""Scenes in three dimensions (issue 37): the schema's dimension rules, the 3D lattice,
+and the Section 4.1 column between four slip walls against Terzaghi's solution."""
+
+import json
+
+import numpy as np
+import pytest
+
+from psph.app.run import run
+from psph.config.load import load_scene
+from psph.geometry.lattice import census, seed
+from psph.physics.initial import initial_particles
+from tests.test_bad_input import run_cli
+
+# the CI-sized column: dx = 0.02 m (4 x 4 x 50 particles), to T_v = 0.1
+SMALL = ["particles.dx=0.02", "domain.max=[0.08, 0.08, 1.0]",
+         "particles.blocks=[{min=[0.0, 0.0, 0.0], max=[0.08, 0.08, 1.0]}]",
+         "verification.tv=[0.05, 0.1]"]
+
+
+@pytest.mark.parametrize("override, words", [
+    (["--set", "gravity=[0.0, -9.81]"], ["gravity", "3 components", "dim = 3"]),
+    (["--set", "particles.blocks=[{min=[0.0, 0.0], max=[0.04, 0.04]}]"],
+     ["particles.blocks[0].min", "3 components"]),
+    (["--set", "dim=2"], ["domain.min", "2 components"]),
+    (["--set", "particles.polygons=[{vertices=[[0, 0], [0.04, 0], [0.04, 0.5]]}]"],
+     ["particles.polygons", "2D only"]),
+    (["--set", "decomposition.axis='w'"], ["decomposition.axis"]),
+])
+def test_a_vector_of_the_wrong_dimension_is_exit_2(override, words):
+    r = run_cli("validate", "terzaghi_3d", *override)
+    assert r.returncode == 2, r.stderr
+    line = r.stderr.strip()
+    assert "\n" not in line and "Traceback" not in line
+    for w in words:
+        assert w in line, line
+
+
+def test_a_2d_scene_refuses_3d_keys():
+    for override, word in ((["--set", "boundaries.front={motion='slip'}"], "boundaries.front"),
+                           (["--set", "gravity=[0.0, 0.0, -9.81]"], "gravity"),
+                           (["--set", "decomposition.axis='z'"], "decomposition.axis")):
+        r = run_cli("validate", "terzaghi", *override)
+        assert r.returncode == 2 and word in r.stderr and "\n" not in r.stderr.strip()
+
+
+def test_dim_follows_the_domain_corner(tmp_path):
+    text = (load_scene("terzaghi_3d").model_dump_json())
+    data = json.loads(text)
+    del data["dim"]
+    from psph.config.schema import Scene
+    assert Scene.model_validate(data).dim == 3
+
+
+def test_3d_lattice_ids_slabs_and_census():
+    """A box block seeds dx^3 particles on its lattice, ids 0..n-1 with x fastest, then y,
+    then z; any slab along any axis holds exactly the particles of its coordinates, with
+    the same ids; the census counts them."""
+    scene = load_scene("terzaghi_3d", ["particles.dx=0.02",
+                                       "domain.max=[0.08, 0.06, 1.0]",
+                                       "particles.blocks=[{min=[0.0, 0.0, 0.0], "
+                                       "max=[0.08, 0.06, 1.0]}]"])
+    x, key = seed(scene)
+    assert x.shape == (4 * 3 * 50, 3) and np.array_equal(key, np.arange(600))
+    assert np.allclose(x[1] - x[0], [0.02, 0, 0]) and np.allclose(x[4] - x[0], [0, 0.02, 0])
+    assert np.allclose(x[12] - x[0], [0, 0, 0.02])
+    for axis in range(3):
+        lo, hi = 0.02, 0.05
+        xs, ks = seed(scene, axis, lo, hi)
+        inside = (x[:, axis] >= lo) & (x[:, axis] < hi)
+        assert np.array_equal(ks, key[inside]) and np.array_equal(xs, x[inside])
+        values, counts = census(scene, axis)
+        for v, c in zip(values, counts, strict=True):
+            assert c == np.sum(x[:, axis] == v)
+    data = initial_particles(scene)
+    assert np.allclose(data["vol"], 0.02 ** 3)
+    top = data["load_index"] == 0
+    assert top.sum() == 12 and np.allclose(data["traction"][top], [0, 0, -0.02 ** 2])
+    assert np.all(x[top, 2] > 0.97)
+
+
+def test_terzaghi_3d_column_within_one_percent(tmp_path):
+    """The Section 4.1 column in 3D, laterally confined by four slip walls (CI size, dx =
+    0.02 m): max |p - p_a| / q within 1 % at T_v = 0.05 and 0.1 (the full column: the
+    bench `bench/verification/terzaghi_3d.py`)."""
+    summary = run(load_scene("terzaghi_3d", SMALL), tmp_path / "out", quiet=True)
+    errors = summary["errors"]["pressure"]
+    assert set(errors) == {"0.05", "0.1"}
+    for tv, e in errors.items():
+        assert e["max_abs_p_error_over_q"] < 0.01, (tv, e)
+    assert summary["pressure_solve"]["steps_not_converged"] == 0
