@@ -1,4 +1,5 @@
-"""Throughput of the coupled elastic step (TPI), and steps/s of the Terzaghi column.
+"""Throughput of the coupled elastic step (TPI) in 2D and 3D, of the elastoplastic
+collapse step in 3D, and steps/s of the Terzaghi column.
 
 Run under mpirun with the rank count to measure, e.g.
     mpirun -n 1 .venv/bin/python bench/performance/throughput.py
@@ -60,6 +61,84 @@ end = 1.0
 damping = 0.02
 """
 
+# the same soil and step in 3D (issue 37): a w x w x hgt block between four slip walls
+BLOCK_3D = """
+name = "throughput_3d_{n}"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [{w}, {w}, {hgt}]
+[particles]
+dx = 0.01
+h_factor = 1.3
+[[particles.blocks]]
+min = [0.0, 0.0, 0.0]
+max = [{w}, {w}, {hgt}]
+[material]
+E = 20.0e6
+nu = 0.33
+porosity = 0.4
+rho_s = 2000.0
+k = 2.0e-4
+[boundaries]
+left = {{ motion = "slip" }}
+right = {{ motion = "slip" }}
+front = {{ motion = "slip" }}
+back = {{ motion = "slip" }}
+bottom = {{ motion = "fixed" }}
+top = {{ motion = "free", flow = "drained" }}
+[[loads]]
+pressure = 1.0e4
+ramp = 0.001
+[pressure]
+scheme = "tpi"
+alpha = 0.5
+[time]
+dt = 5.0e-6
+end = 1.0
+[stabilisation]
+damping = 0.02
+"""
+
+# a dry Drucker-Prager cube released on a fixed floor, a quarter between two symmetry
+# planes (the collapse_3d set-up): the elastoplastic step of a 3D collapse
+COLLAPSE_3D = """
+name = "throughput_collapse_3d_{n}"
+gravity = [0.0, 0.0, -9.81]
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [{far}, {far}, {w}]
+[particles]
+dx = 0.02
+[[particles.blocks]]
+min = [0.0, 0.0, 0.0]
+max = [{w}, {w}, {w}]
+[material]
+model = "drucker_prager"
+E = 20.0e6
+nu = 0.33
+porosity = 0.35
+rho_s = 2650.0
+k = 2.0e-4
+[material.plasticity]
+phi = 25.0
+c = 5.0e3
+c_r = 1.0e3
+eta = 5.0
+psi = 0.0
+[boundaries]
+left = {{ motion = "slip" }}
+front = {{ motion = "slip" }}
+bottom = {{ motion = "fixed" }}
+[initial]
+k0 = 0.577
+[pressure]
+scheme = "none"
+[time]
+end = 1.0
+[stabilisation]
+av_alpha = 1.0
+"""
+
 
 def measure(sim, steps: int, warm: int) -> float:
     for _ in range(warm):
@@ -97,6 +176,24 @@ def main() -> None:
                      "particles": sim.n_global, "steps": steps, "seconds": secs,
                      "particle_steps_per_s_per_core": rate / ranks,
                      "steps_per_s": steps / secs})
+    for w, hgt, steps in ((0.2, 0.4, 10), (0.3, 0.6, 5)):
+        text = BLOCK_3D.format(n=int(round(w * w * hgt * 1e6)), w=w, hgt=hgt)
+        scene = resolve(validate(tomllib.loads(text)))
+        sim = Simulation(scene, make_slabs(scene, comm))
+        secs = measure(sim, steps, warm=2)
+        rows.append({"case": f"3D coupled elastic TPI step, N = {sim.n_global}", "dim": 3,
+                     "particles": sim.n_global, "steps": steps, "seconds": secs,
+                     "particle_steps_per_s_per_core": sim.n_global * steps / secs / ranks,
+                     "steps_per_s": steps / secs})
+    text = COLLAPSE_3D.format(n=27000, w=0.6, far=1.8)
+    scene = resolve(validate(tomllib.loads(text)))
+    sim = Simulation(scene, make_slabs(scene, comm))
+    steps = 10
+    secs = measure(sim, steps, warm=2)
+    rows.append({"case": f"3D elastoplastic collapse step, N = {sim.n_global}", "dim": 3,
+                 "particles": sim.n_global, "steps": steps, "seconds": secs,
+                 "particle_steps_per_s_per_core": sim.n_global * steps / secs / ranks,
+                 "steps_per_s": steps / secs})
     scene = load_scene("terzaghi_tpi", ["pressure.explicit_until=0.0",
                                     "boundaries.top.drained_from=0.0"])
     sim = Simulation(scene, make_slabs(scene, comm))
@@ -109,10 +206,10 @@ def main() -> None:
     if comm.Get_rank() == 0:
         print(f"\npsph throughput on {ranks} rank(s), {platform.processor() or 'cpu'}, "
               f"{date.today()}")
-        print(f"{'case':44s} {'steps':>6s} {'wall s':>8s} {'p-steps/s/core':>15s} "
+        print(f"{'case':48s} {'steps':>6s} {'wall s':>8s} {'p-steps/s/core':>15s} "
               f"{'steps/s':>9s}")
         for r in rows:
-            print(f"{r['case']:44s} {r['steps']:6d} {r['seconds']:8.3f} "
+            print(f"{r['case']:48s} {r['steps']:6d} {r['seconds']:8.3f} "
                   f"{r['particle_steps_per_s_per_core']:15,.0f} {r['steps_per_s']:9.1f}")
         OUT.mkdir(exist_ok=True)
         meta = {"date": str(date.today()), "ranks": ranks, "machine": platform.node(),
@@ -132,17 +229,22 @@ def plot() -> None:
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     for run in runs:
         blocks = [r for r in run["rows"] if r["case"].startswith("coupled")]
+        blocks_3d = [r for r in run["rows"] if r["case"].startswith("3D")]
         col = [r for r in run["rows"] if r["case"].startswith("Terzaghi")]
         a1.plot([r["particles"] for r in blocks],
                 [r["particle_steps_per_s_per_core"] / 1e6 for r in blocks], "o-",
-                label=f"{run['ranks']} rank(s)")
+                label=f"{run['ranks']} rank(s), 2D")
+        if blocks_3d:
+            a1.plot([r["particles"] for r in blocks_3d],
+                    [r["particle_steps_per_s_per_core"] / 1e6 for r in blocks_3d], "s--",
+                    label=f"{run['ranks']} rank(s), 3D (elastic, collapse)")
         a2.bar(str(run["ranks"]), col[0]["steps_per_s"])
     a1.axhline(1.0, ls="--", c="grey", label="bar: 1e6")
     a1.set_xscale("log")
     a1.set_xlabel("particles")
     a1.set_ylabel("million particle-steps / s / core")
     a1.legend()
-    a1.set_title("coupled elastic TPI step (2D, h = 1.3 dx)")
+    a1.set_title("coupled elastic TPI step (h = 1.3 dx); 3D collapse step")
     a2.axhline(1500, ls="--", c="grey")
     a2.set_xlabel("ranks")
     a2.set_ylabel("steps / s")

@@ -168,8 +168,9 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
             sigma_v -= g * overburden(data["rho"], x[:, vz], column, len(top), dx, reducer)
         sigma_v += data.get("p", np.zeros(n))
         stress = np.zeros((n, 4 if vz == 1 else 6))
-        stress[:, :3] = init.k0 * sigma_v
-        stress[:, vz] = sigma_v
+        horizontal = init.k0 * sigma_v
+        for c in range(3):
+            stress[:, c] = sigma_v if c == vz else horizontal
         data["stress"] = stress
 
 
