@@ -79,13 +79,47 @@ def test_3d_lattice_ids_slabs_and_census():
     assert np.all(x[top, 2] > 0.97)
 
 
-def test_terzaghi_3d_column_within_one_percent(tmp_path):
+@pytest.fixture(scope="module")
+def small_column(tmp_path_factory):
+    out = tmp_path_factory.mktemp("terzaghi_3d") / "out"
+    return out, run(load_scene("terzaghi_3d", SMALL), out, quiet=True)
+
+
+def test_terzaghi_3d_column_within_one_percent(small_column):
     """The Section 4.1 column in 3D, laterally confined by four slip walls (CI size, dx =
-    0.02 m): max |p - p_a| / q within 1 % at T_v = 0.05 and 0.1 (the full column: the
-    bench `bench/verification/terzaghi_3d.py`)."""
-    summary = run(load_scene("terzaghi_3d", SMALL), tmp_path / "out", quiet=True)
+    0.02 m): max |p - p_a| / q within 1 % at T_v = 0.05 and 0.1 (the full column:
+    `mpirun -n 2 .venv/bin/python bench/verification/default_run.py --scene terzaghi_3d`)."""
+    _, summary = small_column
     errors = summary["errors"]["pressure"]
     assert set(errors) == {"0.05", "0.1"}
     for tv, e in errors.items():
         assert e["max_abs_p_error_over_q"] < 0.01, (tv, e)
     assert summary["pressure_solve"]["steps_not_converged"] == 0
+
+
+def test_paraview_reader_opens_the_3d_run(small_column):
+    """VTK's XDMF reader (ParaView's) opens particles.xdmf of a 3D run: every snapshot a
+    time step, 3D points within the column, p and the 6-component stress."""
+    import vtk
+
+    out, summary = small_column
+    reader = vtk.vtkXdmfReader()
+    reader.SetFileName(str(out / "particles.xdmf"))
+    reader.UpdateInformation()
+    times = reader.GetOutputInformation(0).Get(vtk.vtkStreamingDemandDrivenPipeline.TIME_STEPS())
+    assert len(times) == 3 and times[0] == 0.0
+    reader.UpdateTimeStep(times[-1])
+    grid = reader.GetOutputDataObject(0)
+    assert grid.GetNumberOfPoints() == summary["particles"] == 800
+    x0, x1, y0, y1, z0, z1 = grid.GetBounds()
+    assert 0 < x0 < x1 < 0.08 and 0 < y0 < y1 < 0.08 and 0.0 < z0 < 0.02 and 0.95 < z1 < 1.0
+    assert grid.GetPointData().GetArray("p").GetNumberOfComponents() == 1
+    assert grid.GetPointData().GetArray("stress").GetNumberOfTuples() == 800
+
+
+def test_plot_draws_section_plan_and_perspective(small_column):
+    out, _ = small_column
+    r = run_cli("plot", str(out))
+    assert r.returncode == 0, r.stderr
+    for name in ("section_p.png", "plan.png", "perspective_p.png", "terzaghi.png"):
+        assert (out / name).stat().st_size > 10_000, name

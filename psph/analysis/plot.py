@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import ListedColormap  # noqa: E402
 
+from psph.analysis.views_3d import pictures_3d  # noqa: E402
 from psph.config.boundaries import points_of  # noqa: E402
 from psph.config.load import run_scene  # noqa: E402
 from psph.errors import SceneError  # noqa: E402
@@ -33,7 +34,15 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
         raise SceneError(f"plot {out}: no particles.h5 (is it a psph output directory?)")
     scene = run_scene(out)
     snaps = read_snapshots(h5)
-    paths = [_field_picture(out, snaps[-1], field)]
+    if field not in snaps[-1]:
+        raise SceneError(f"plot --field {field}: not a snapshot field "
+                         f"({', '.join(k for k in snaps[-1] if k not in ('time', 'step'))})")
+    if scene.dim == 3:
+        front = scene.boundaries.front.motion == "slip"
+        paths = pictures_3d(out, snaps[-1], field, scene.particles.dx, scene.domain.min[2],
+                            front)
+    else:
+        paths = [_field_picture(out, snaps[-1], field)]
     ref = scene.verification.reference
     if ref == "terzaghi":
         paths.append(_terzaghi_picture(out, scene, snaps))
@@ -260,14 +269,15 @@ def _field_picture(out: Path, snap: dict, field: str) -> Path:
 
 def _terzaghi_picture(out: Path, scene, snaps: list[dict]) -> Path:
     ref = terzaghi.from_scene(scene)
-    top = max(b.max[1] for b in scene.particles.blocks)
+    vz = scene.dim - 1  # the vertical axis
+    top = max(b.max[vz] for b in scene.particles.blocks)
     fig, (ax1, ax2, ax4) = plt.subplots(1, 3, figsize=(16, 4.8))
     zz = np.linspace(0, ref.height, 200)
     colours = plt.cm.viridis(np.linspace(0, 0.9, max(len(scene.verification.tv), 1)))
     for tv, col in zip(scene.verification.tv, colours, strict=False):
         t = ref.time_of(tv)
         snap = min(snaps, key=lambda s, t=t: abs(s["time"] - t))
-        depth = top - (snap["x"][:, 1] - snap["u"][:, 1])
+        depth = top - (snap["x"][:, vz] - snap["u"][:, vz])
         ax1.plot(snap["p"] / ref.load, depth, ".", ms=2.5, color=col)
         tv_act = float(ref.tv_of(snap["time"]))
         ax1.plot(ref.pressure(zz, snap["time"]) / ref.load, zz, "-", color=col, lw=1.2,
@@ -291,7 +301,7 @@ def _terzaghi_picture(out: Path, scene, snaps: list[dict]) -> Path:
     ax2.set_title("settlement (top row, dx/2 deep)")
     ax2.legend()
     hist = _history(out)
-    probes = [k[2:] for k in hist if k.startswith("p_") and k != "p_max"]
+    probes = [k[2:] for k in hist if k.startswith("p_") and k not in ("p_max", "p_min")]
     window = t <= 5 * ref.t_drain
     for name in probes:
         ax4.plot(t[window], hist[f"p_{name}"][window] / ref.load, ".-", ms=3, lw=0.8,
