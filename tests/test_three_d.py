@@ -123,3 +123,70 @@ def test_plot_draws_section_plan_and_perspective(small_column):
     assert r.returncode == 0, r.stderr
     for name in ("section_p.png", "plan.png", "perspective_p.png", "terzaghi.png"):
         assert (out / name).stat().st_size > 10_000, name
+
+
+def _cube_surface(path, lo=0.1, hi=0.5, drop=0):
+    """A closed cube surface [lo, hi]^3 as 12 triangles (`drop` of them left out)."""
+    import meshio
+
+    v = np.array([[x, y, z] for z in (lo, hi) for y in (lo, hi) for x in (lo, hi)], float)
+    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2],
+             [1, 3, 7, 5]]
+    tri = [[q[0], q[1], q[2]] for q in quads] + [[q[0], q[2], q[3]] for q in quads]
+    meshio.write(path, meshio.Mesh(v, [("triangle", np.array(tri[drop:]))]))
+    return path
+
+
+def _sphere_surface(path, centre, radius, n=48):
+    """A closed latitude-longitude sphere surface of quads (triangles at the poles)."""
+    import meshio
+
+    th = np.linspace(0, np.pi, n // 2 + 1)[1:-1]
+    ph = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = np.array([[np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)]
+                     for t in th for p in ph])
+    pts = np.vstack([[0, 0, 1], ring, [0, 0, -1]]) * radius + centre
+    m, last = len(ph), len(pts) - 1
+    tri = [[0, 1 + i, 1 + (i + 1) % m] for i in range(m)]
+    for r in range(len(th) - 1):
+        a, b = 1 + r * m, 1 + (r + 1) * m
+        for i in range(m):
+            j = (i + 1) % m
+            tri += [[a + i, b + i, b + j], [a + i, b + j, a + j]]
+    a = 1 + (len(th) - 1) * m
+    tri += [[a + i, last, a + (i + 1) % m] for i in range(m)]
+    meshio.write(path, meshio.Mesh(pts, [("triangle", np.array(tri))]))
+    return path
+
+
+def test_volumes_from_closed_surface_meshes(tmp_path):
+    """A closed surface (STL) fills the domain lattice points inside it: a cube exactly,
+    a sphere to within its faceting; ids in lattice order on any slab."""
+    from psph.geometry.solids import inside_surface, read_surface
+
+    pts, tri = read_surface(str(_cube_surface(tmp_path / "cube.stl")), "k")
+    xs = (np.arange(20) + 0.5) * 0.05
+    assert inside_surface(xs, xs, xs, pts, tri, 0.05).sum() == 8 ** 3
+    sphere = _sphere_surface(str(tmp_path / "sphere.stl"), [0.5, 0.5, 0.5], 0.4)
+    scene = load_scene("terzaghi_3d", [
+        "domain.max=[1.0, 1.0, 1.0]", "particles.dx=0.04", "particles.blocks=[]",
+        f"particles.meshes=[{{file='{sphere}'}}]", "loads=[]",
+        "verification.reference='none'", "time.end=0.01"])
+    x, key = seed(scene)
+    volume = len(x) * 0.04 ** 3
+    assert abs(volume / (4 / 3 * np.pi * 0.4 ** 3) - 1) < 0.03
+    assert np.all(np.linalg.norm(x - 0.5, axis=1) < 0.4 + 1e-9)
+    assert np.array_equal(key, np.arange(len(x)))
+    xs_, ks = seed(scene, 1, 0.3, 0.6)
+    inside = (x[:, 1] >= 0.3) & (x[:, 1] < 0.6)
+    assert np.array_equal(ks, key[inside]) and np.array_equal(xs_, x[inside])
+    values, counts = census(scene, 2)
+    assert counts.sum() == len(x)
+
+
+def test_an_open_surface_where_a_volume_is_asked_is_exit_2(tmp_path):
+    stl = _cube_surface(str(tmp_path / "open.stl"), drop=1)
+    r = run_cli("validate", "terzaghi_3d", "--set", f"particles.meshes=[{{file='{stl}'}}]")
+    line = r.stderr.strip()
+    assert r.returncode == 2 and "\n" not in line, line
+    assert "particles.meshes[0].file" in line and "not closed" in line

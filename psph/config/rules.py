@@ -10,6 +10,7 @@ from psph.config.materials import check_materials
 from psph.errors import SceneRule as _Rule
 from psph.geometry.box import side_planes
 from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
+from psph.geometry.solids import read_surface
 from psph.physics.limits import (
     TPI_ALPHA_MAX,
     solid_dt_limit,
@@ -52,6 +53,8 @@ def check_scene(scene):
     for im, mesh in enumerate(pa.meshes):
         if not Path(mesh.file).is_file():
             raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")
+        if dim == 3:  # a closed surface, read once here so that bad input stops early
+            read_surface(mesh.file, f"particles.meshes[{im}].file")
     for ib, b in enumerate(scene.particles.blocks):
         for d in range(dim):
             if b.max[d] <= b.min[d]:
@@ -140,8 +143,8 @@ def check_dimension(scene) -> None:
                             "3D only (a 2D scene has left, right, bottom, top)")
         return
     pa = scene.particles
-    two_d = [("particles.polygons", pa.polygons), ("particles.meshes", pa.meshes),
-             ("particles.layers", pa.layers), ("boundaries.polylines", b.polylines),
+    two_d = [("particles.polygons", pa.polygons), ("particles.layers", pa.layers),
+             ("boundaries.polylines", b.polylines),
              ("remove.polygon", [r for r in scene.remove if r.polygon is not None]),
              ("loads.range", [ld for ld in scene.loads if ld.range is not None]),
              ("initial.water_table", [] if scene.initial.water_table is None
@@ -150,7 +153,8 @@ def check_dimension(scene) -> None:
     for key, items in two_d:
         if items:
             raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "
-                        "particles.blocks, box sides, a level water table)")
+                        "particles.blocks, particles.meshes (closed surfaces), box sides, a "
+                        "level water table)")
 
 
 def check_integrator(scene) -> None:

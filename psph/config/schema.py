@@ -56,10 +56,11 @@ class Polygon(_Model):
 
 class MeshGeometry(_Model):
     """Soil from any mesh file meshio reads: particles on the domain lattice inside its
-    triangles and quads (2D, x-y plane)."""
+    triangles and quads (2D, x-y plane), or in 3D inside the volume a closed surface
+    mesh (STL, OBJ, PLY, ...) bounds."""
 
-    file: str = Field(description="Path of a mesh file meshio reads (2D triangles/quads in "
-                      "x-y)")
+    file: str = Field(description="Path of a mesh file meshio reads: 2D triangles/quads in "
+                      "x-y, or in 3D a closed triangle/quad surface")
     material: str | None = Field(None, description="Name of a [[materials]] table; default "
                                  "the first material")
 
