@@ -174,6 +174,28 @@ def test_compiled_serial_pcg_gives_the_same_bits():
                            np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.u,
                            wk.w, wk.d, wk.sd, np.zeros(EXPANSION_CAP),
                            np.zeros(CHUNK_ROW, np.int64), np.zeros(BLOCK),
-                           np.zeros(CHUNKS, np.int64))
+                           np.zeros(CHUNKS, np.int64), np.zeros(0))
     assert res.converged and ok and it == res.iterations and r == res.residual
     assert np.array_equal(p_nb, p_py)
+
+
+def test_rounded_dots_are_the_same_bits_on_any_split():
+    """`kernels/recycling.rounded_dots`: the integer sums of two halves of the rows add to
+    those of all rows (the recycled guess's inner products on 1 and 2 ranks), and the
+    value is the dot product to the grid's precision."""
+    from psph.kernels.recycling import max_abs_products, rounded_dots
+
+    rng = np.random.default_rng(3)
+    n, k = 1000, 7
+    basis = rng.normal(size=(n, k)) * np.exp(rng.normal(size=(n, 1)) * 3)
+    r = rng.normal(size=n)
+    free = rng.random(n) > 0.1
+    m = max_abs_products(n, basis, k, r, free)
+    scale = 2.0 ** (62 - math.frexp(m * n)[1])
+    whole, lo, hi = (np.zeros(k, np.int64) for _ in range(3))
+    rounded_dots(n, basis, k, r, free, scale, whole)
+    rounded_dots(400, basis, k, r, free, scale, lo)
+    rounded_dots(n - 400, basis[400:], k, r[400:], free[400:], scale, hi)
+    assert np.array_equal(lo + hi, whole)
+    exact = (basis[free] * r[free, None]).sum(axis=0)
+    assert np.allclose(whole / scale, exact, rtol=0, atol=n * m * 2.0 ** -52)

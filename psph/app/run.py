@@ -184,6 +184,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         next_hist = meta["next_hist"]
         if monitor is not None:
             monitor.restore(meta["monitor"])
+        sim.pressure_solve.recycled.restore(meta.get("recycled_guess"))
         if rank0:
             history = read_history(restart)
     ck = scene.checkpoint
@@ -266,6 +267,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
                 "n_ids": sim.n_ids, "removals_done": sim.removals_done,
                 "next_hist": next_hist, "scene": toml_text,
                 "monitor": None if monitor is None else monitor.state(),
+                "recycled_guess": sim.pressure_solve.recycled.state(),
                 "ranks": slabs.size}
         nbytes = 8 * sim.n_global * sim.store.row_width + 8 * (sim.n_ids - sim.n_global) \
             + 400 * len(history)

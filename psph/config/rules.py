@@ -90,6 +90,8 @@ def check_scene(scene):
                             f"probe outside the domain [{lo}, {hi}]")
     if scene.pressure.scheme == "projection" and scene.boundaries.polylines:
         raise _Rule("pressure.scheme", "projection", "not yet with boundaries.polylines")
+    if scene.pressure.recycle == 1:
+        raise _Rule("pressure.recycle", 1, "0 (off) or at least 2 basis vectors")
     if scene.pressure.momentum != "pair" and scene.pressure.scheme not in ("explicit", "tpi"):
         raise _Rule("pressure.momentum", scene.pressure.momentum,
                     "needs pressure.scheme 'explicit' or 'tpi' (the projection's velocity "

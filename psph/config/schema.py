@@ -139,6 +139,9 @@ class Pressure(_Model):
         "solve [-]")
     max_iterations: Annotated[int, Field(ge=1)] = Field(
         2000, description="Iteration cap of the projection's conjugate-gradient solve")
+    recycle: Annotated[int, Field(ge=0, le=512)] = Field(
+        0, description="Earlier CG corrections kept to project the projection's initial "
+        "guess on (Fischer 1998); 0 is off, else at least 2; 16 L bytes a particle [-]")
     # `tpi_gain_limit`, bench/verification/stability.py
     allow_unstable: bool = Field(
         False, description="Run beyond the measured stability checks: TPI with α above "

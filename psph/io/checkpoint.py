@@ -277,7 +277,9 @@ def _pack_chunk(f: h5py.File, a: int, b: int, order: np.ndarray, send: np.ndarra
 
 def _fields(f: h5py.File) -> tuple:
     """The particle fields of a checkpoint, with the widths of its dimension."""
-    return fields_of_dim(int(f["particles"]["x"].shape[1]))
+    parts = f["particles"]
+    recycle = parts["recycle_x"].shape[1] if "recycle_x" in parts else 0
+    return fields_of_dim(int(parts["x"].shape[1]), recycle)
 
 
 def _reason(e: Exception) -> str:

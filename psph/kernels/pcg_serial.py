@@ -32,16 +32,21 @@ def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, c_diag: np
                diag: np.ndarray, rhs: np.ndarray, x: np.ndarray, src: np.ndarray,
                sign: np.ndarray, tol: float, maxiter: int, r: np.ndarray, u: np.ndarray,
                w: np.ndarray, d: np.ndarray, sd: np.ndarray, partials: np.ndarray,
-               row: np.ndarray, terms: np.ndarray, acc: np.ndarray) -> tuple:
+               row: np.ndarray, terms: np.ndarray, acc: np.ndarray,
+               r0: np.ndarray) -> tuple:
     """Solve S x = rhs on rows 0..n-1 (rows n..n_total-1: wall ghosts, x's current on
     entry). c_diag, c_off, c_storage: the operator's coefficients
     (`laplacian.operator_coefficients`); r, u, w, d, sd: scratch as `pcg.PCGWork`;
-    partials, row, terms, acc: scratch of the exact dot products (`exact_sum.chunked_dot`).
+    partials, row, terms, acc: scratch of the exact dot products (`exact_sum.chunked_dot`);
+    r0: receives the first residual when it has at least n rows (r the last).
     Returns (iterations, residual, converged) as `psph.solver.pcg.pcg`, whose
     Chronopoulos-Gear recurrences these are, step for step."""
     apply_scaled(n, n_pairs, pairs, c_diag, c_off, c_storage, fixed, x, w)
     for i in range(n):
         r[i] = rhs[i] - w[i]
+    if r0.shape[0] >= n:
+        for i in range(n):
+            r0[i] = r[i]
     jacobi(n, r, diag, u)
     _refresh_ghosts(n, n_total, src, sign, u)
     apply_scaled(n, n_pairs, pairs, c_diag, c_off, c_storage, fixed, u, w)

@@ -55,18 +55,21 @@ class PCGResult:
 def pcg(apply: Callable[[np.ndarray, np.ndarray], None], diag: np.ndarray, rhs: np.ndarray,
         x: np.ndarray, n_owned: int, dots: Callable[..., list[float]],
         refresh: Callable[[np.ndarray], None], tol: float, maxiter: int,
-        work: PCGWork) -> PCGResult:
+        work: PCGWork, r0_out: np.ndarray | None = None) -> PCGResult:
     """Solve S x = rhs for the owned rows of x (its initial value is the first guess; its
     halo rows must be current). Stops when ||r|| <= tol ||rhs||. Collective: every rank
     calls `dots` and `refresh` in the same order. The same iterates as
     `kernels/pcg_serial.py`, whose dot products are evaluated one at a time: exact sums do
     not depend on when they are taken. On return the halo rows of x are not
-    refreshed."""
+    refreshed; work.r holds the last residual (of the recurrences), and `r0_out`,
+    if given, the first (rhs - S x on entry)."""
     n = n_owned
     work.ensure(x.shape[0])
     r, u, w, d, sd = work.r, work.u, work.w, work.d, work.sd
     apply(x, w)
     np.subtract(rhs[:n], w[:n], out=r[:n])
+    if r0_out is not None:
+        r0_out[:n] = r[:n]
     jacobi(n, r, diag, u)
     refresh(u)
     apply(u, w)

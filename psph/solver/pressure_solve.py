@@ -24,6 +24,7 @@ from psph.kernels.projection import (
 )
 from psph.solver.exact_dots import ExactDots
 from psph.solver.pcg import PCGResult, PCGWork, pcg
+from psph.solver.recycling import RecycledGuess
 
 
 class PressureSolve:
@@ -41,6 +42,8 @@ class PressureSolve:
         self._terms = np.zeros(BLOCK)
         self._acc = np.zeros(CHUNKS, np.int64)
         self._row = np.zeros(CHUNK_ROW, np.int64)
+        self.recycled = RecycledGuess(sim.recycle)
+        self._no_r0 = np.zeros(0)
 
     def _arrays(self, cap: int, n_pairs: int) -> dict:
         a = self._a
@@ -168,7 +171,6 @@ class PressureSolve:
         d[:n] -= last
         np.subtract(st.p[:n], st.p_prev[:n], out=last)
         np.copyto(d[:n], value[:n], where=fixed[:n])
-        self.refresh_rows(dp, signed=True)
 
         def apply(q, out):
             apply_scaled(n, npairs, sim.pairs, a["c_diag"], a["c_off"], a["c_storage"], fixed, q,
@@ -176,6 +178,17 @@ class PressureSolve:
 
         def refresh(q):
             self.refresh_rows(q.reshape(-1, 1), signed=True)
+
+        recycled = self.recycled
+        r0 = None
+        if recycled.size:
+            free = ~fixed[:n]
+            basis = (st.recycle_x, st.recycle_sx)
+            recycled.start(tuple(sim.drainage.planes[:, 3]) if sim.drainage.has_planes
+                           else ())
+            recycled.guess(sim, basis, a["rhs"], d, free, apply, refresh)
+            r0 = recycled.r0
+        self.refresh_rows(dp, signed=True)
 
         pc = sim.scene.pressure
         if sim.slabs.size == 1:  # the same bits, compiled (kernels/pcg_serial.py)
@@ -185,15 +198,18 @@ class PressureSolve:
                                         a["c_storage"], fixed, a["diag"], a["rhs"], d,
                                         sim.ghost_src, sim.ghost_sign, pc.tolerance,
                                         pc.max_iterations, wk.r, wk.u, wk.w, wk.d, wk.sd,
-                                        self._buf, self._row, self._terms, self._acc))
+                                        self._buf, self._row, self._terms, self._acc,
+                                        self._no_r0 if r0 is None else r0))
         else:
             res = pcg(apply, a["diag"], a["rhs"], d, n, self._dots, refresh, pc.tolerance,
-                      pc.max_iterations, self._work)
+                      pc.max_iterations, self._work, r0)
         sv = self.stats
         sv["iterations"], sv["residual"] = res.iterations, res.residual
         sv["iterations_total"] += res.iterations
         sv["iterations_max"] = max(sv["iterations_max"], res.iterations)
         sv["not_converged"] += not res.converged
+        if recycled.size:
+            recycled.update(sim, basis, d, free, a["rhs"], r0, self._work.r)
         self.refresh_rows(dp, signed=True)
         # after the kick (symplectic step) the correction completes a^n in st.acc; in the
         # one-sweep step `advance` writes a^n there after this, so it is kept aside

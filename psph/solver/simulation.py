@@ -70,6 +70,10 @@ class Simulation(Stages):
 
         fresh = particles is None
         data = initial_particles(scene, slabs.reducer, slabs.slab) if fresh else particles
+        recycle = scene.pressure.recycle if scene.pressure.scheme == "projection" else 0
+        width = data["recycle_x"].shape[-1] if "recycle_x" in data else 0
+        if width != recycle:  # a checkpoint's basis of another size: the guess starts anew
+            data = {k: v for k, v in data.items() if not k.startswith("recycle_")}
         n_local = len(data["key"])
         self.n_global = int(slabs.reducer.sum(np.array([n_local], np.int64))[0])
         # ids run 0..n_ids-1; each is owned once or removed once (checked at snapshots)
@@ -77,7 +81,9 @@ class Simulation(Stages):
         self.n_ids = self.census.n_ids
         self.removals = sorted(scene.remove, key=lambda r: r.at)
         self.removals_done = removals_done
-        self.store = ParticleStore(2 * n_local + 256, dim)
+        # the recycled guess's basis (psph/solver/recycling.py): projection runs only
+        self.recycle = recycle
+        self.store = ParticleStore(2 * n_local + 256, dim, self.recycle)
         self.store.load(data)
         if fresh:
             self.store.u[:] = 0.0

@@ -59,25 +59,32 @@ _FIELDS: tuple[Field, ...] = (
 
 
 
-def fields_of_dim(dim: int) -> tuple[Field, ...]:
-    """The fields with their component counts in `dim` dimensions."""
+def fields_of_dim(dim: int, recycle: int = 0) -> tuple[Field, ...]:
+    """The fields with their component counts in `dim` dimensions; with `recycle` > 0
+    (`pressure.recycle`, at least 2) the recycled guess's basis and its images
+    (psph/solver/recycling.py), `recycle` columns each."""
     width = {VECTOR: dim, STRESS: 4 if dim == 2 else 6}
-    return tuple(replace(f, ncomp=width.get(f.ncomp, f.ncomp)) for f in _FIELDS)
+    fields = tuple(replace(f, ncomp=width.get(f.ncomp, f.ncomp)) for f in _FIELDS)
+    if recycle > 0:
+        fields += (Field("recycle_x", recycle, "1", "earlier pressure-solve corrections, "
+                         "S-orthonormal (the recycled guess's basis)", False),
+                   Field("recycle_sx", recycle, "Pa", "their images S x", False))
+    return fields
 
 
 FIELDS = fields_of_dim(2)
 FIELD_BY_NAME = {f.name: f for f in FIELDS}
 # fields added after checkpoint format 1 was fixed: zero when an older checkpoint lacks them
-ADDED_FIELDS = ("dp_prev", "material", "plastic_work")
+ADDED_FIELDS = ("dp_prev", "material", "plastic_work", "recycle_x", "recycle_sx")
 NEIGHBOUR_FIELDS = tuple(f.name for f in FIELDS if f.neighbour)
 
 
 class ParticleStore:
     """Owns the arrays; exposes them as attributes (`store.p`, `store.x`, ...)."""
 
-    def __init__(self, capacity: int, dim: int = 2):
+    def __init__(self, capacity: int, dim: int = 2, recycle: int = 0):
         self.dim = dim
-        self.fields = fields_of_dim(dim)
+        self.fields = fields_of_dim(dim, recycle)
         self.cap = 0
         self.n_owned = 0
         self.n_halo = 0
