@@ -168,7 +168,8 @@ def test_compiled_serial_pcg_gives_the_same_bits():
     wk = PCGWork()
     wk.ensure(n)
     c_diag, c_off, c_storage = np.zeros(len(pairs)), np.zeros(len(pairs)), np.zeros(n)
-    operator_coefficients(n, len(pairs), pairs, w, w_off, vol, s, c_diag, c_off, c_storage)
+    operator_coefficients(n, len(pairs), pairs, w, w_off, vol, s, c_diag, c_off, c_storage,
+                          np.zeros(n))
     it, r, ok = pcg_serial(n, n, len(pairs), pairs, c_diag, c_off, c_storage, fixed, diag, rhs,
                            p_nb,
                            np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.u,

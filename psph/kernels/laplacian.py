@@ -86,18 +86,28 @@ pair_weights_3d = make_pair_weights(3)
 
 
 @nb.njit(cache=True)
-def operator_coefficients(n_total: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
+def operator_coefficients(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
                           w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray,
-                          c_diag: np.ndarray, c_off: np.ndarray, c_storage: np.ndarray) -> None:
+                          c_diag: np.ndarray, c_off: np.ndarray, c_storage: np.ndarray,
+                          diag: np.ndarray) -> None:
     """The products of `apply_operator` that do not change during a solve: c_diag[k] =
     V_a V_b w_diag[k], c_off[k] = V_a V_b w_off[k] and c_storage[i] = V_i s_i, computed once
-    per solve for `apply_scaled` (the same roundings, so the same bits)."""
-    for i in range(n_total):
+    per solve for `apply_scaled` (the same roundings, so the same bits), and in the same
+    pass the diagonal of S (`operator_diagonal`, the Jacobi preconditioner) into diag."""
+    for i in range(n_owned):
         c_storage[i] = vol[i] * storage[i]
+        diag[i] = c_storage[i]
     for k in range(n_pairs):
-        vv = vol[pairs[k, 0]] * vol[pairs[k, 1]]
-        c_diag[k] = vv * w_diag[k]
+        a = pairs[k, 0]
+        b = pairs[k, 1]
+        vv = vol[a] * vol[b]
+        cd = vv * w_diag[k]
+        c_diag[k] = cd
         c_off[k] = vv * w_off[k]
+        if a < n_owned:
+            diag[a] += cd
+        if b < n_owned:
+            diag[b] += cd
 
 
 @nb.njit(cache=True)
@@ -137,7 +147,7 @@ def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.nda
     c_off = np.empty(n_pairs)
     c_storage = np.empty(n_owned)
     operator_coefficients(n_owned, n_pairs, pairs, w_diag, w_off, vol, storage, c_diag,
-                          c_off, c_storage)
+                          c_off, c_storage, np.empty(n_owned))
     apply_scaled(n_owned, n_pairs, pairs, c_diag, c_off, c_storage, fixed, q, out)
 
 

@@ -14,7 +14,6 @@ from psph.kernels.laplacian import (
     apply_scaled,
     fixed_rhs,
     operator_coefficients,
-    operator_diagonal,
 )
 from psph.kernels.pcg_serial import pcg_serial
 from psph.kernels.projection import (
@@ -99,9 +98,11 @@ class PressureSolve:
         nt = st.n_total
         np.greater(imposed[:nt, 0], 0.5, out=fixed[:nt])
         value = imposed[:, 1]
-        fixed_rhs(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, value, a["rhs"])
+        if fixed[:nt].any():  # else the right-hand side has no imposed part
+            fixed_rhs(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], fixed, value,
+                      a["rhs"])
         operator_coefficients(n, npairs, sim.pairs, wd, wo, st.vol, a["storage"], a["c_diag"],
-                              a["c_off"], a["c_storage"])
+                              a["c_off"], a["c_storage"], a["diag"])
         return a, wd, wo, fixed, value
 
     def residual(self) -> float:
@@ -158,7 +159,6 @@ class PressureSolve:
         a, wd, wo, fixed, value = self._system(st.p, sim.t)
         dp = a["dp"]
         nt = st.n_total
-        operator_diagonal(n, npairs, sim.pairs, wd, st.vol, a["storage"], a["diag"])
         # warm start: the last two increments extrapolated, 2 (p^n - p^(n-1)) - (p^(n-1) -
         # p^(n-2)) (mean CG iterations 6.7 -> 2.9 on the paper's column at the solid cap,
         # tol 1e-6, the same p); with dp_prev = 0 (the first projection step after an
