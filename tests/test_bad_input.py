@@ -166,7 +166,8 @@ def test_list_names_builtin_scenes():
     assert names == ["collapse_dry", "collapse_saturated_psi-5", "collapse_saturated_psi0",
                      "collapse_saturated_psi2.5", "geostatic_column", "harmonic",
                      "retrogressive_k0_0.5", "retrogressive_k0_1.5", "slope_section",
-                     "strip_footing", "terzaghi", "terzaghi_tpi", "terzaghi_undrained"]
+                     "strip_footing", "terzaghi", "terzaghi_3d", "terzaghi_tpi",
+                     "terzaghi_undrained"]
 
 
 def test_set_override_reaches_resolved_scene(tmp_path):
