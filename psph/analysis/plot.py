@@ -52,7 +52,32 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
         paths.append(_strip_picture(out, scene, snaps))
     elif ref == "collapse":
         paths.append(_collapse_picture(out, scene, snaps))
+    elif ref == "cryer":
+        paths.append(_cryer_picture(out, scene))
     return paths
+
+
+def _cryer_picture(out: Path, scene) -> Path:
+    """The centre probe's p / p0 against c t / a^2 beside Cryer's series (timed from the
+    middle of the load's ramp, as `verify.cryer.centre_errors`)."""
+    from psph.verify.cryer import from_scene as cryer_from_scene
+
+    ref = cryer_from_scene(scene)
+    hist = _history(out)
+    t = hist["time"] - 0.5 * scene.loads[0].ramp
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(ref.time_factor(t), hist["p_centre"] / ref.p0, ".", ms=3, label="SPH, centre")
+    ts = np.linspace(1e-4, max(float(t[-1]), 1e-3), 600)
+    ax.plot(ref.time_factor(ts), ref.centre_pressure(ts) / ref.p0, "-", label="Cryer's series")
+    ax.axhline(1.0, color="grey", lw=0.8, ls=":")
+    ax.set(xlabel="c t / a^2", ylabel="p / p0 at the centre",
+           title=f"{scene.name}: the Mandel-Cryer effect (p0 = {ref.p0:.0f} Pa)")
+    ax.legend()
+    path = out / "cryer.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def excess_of(snap: dict, scene) -> np.ndarray:

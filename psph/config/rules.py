@@ -34,7 +34,7 @@ def check_scene(scene):
         if hi[d] <= lo[d]:
             raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
     pa = scene.particles
-    if not (pa.blocks or pa.polygons or pa.meshes or pa.layers):
+    if not (pa.blocks or pa.polygons or pa.meshes or pa.layers or pa.spheres):
         raise _Rule("particles", "no blocks, polygons, meshes or layers",
                     "give at least one [[particles.blocks]], [[particles.polygons]], "
                     "[[particles.meshes]] or [[particles.layers]]")
@@ -131,11 +131,22 @@ def check_dimension(scene) -> None:
     for ir, rm in enumerate(scene.remove):
         vectors += [(f"remove[{ir}].{k}", v) for k, v in (("min", rm.min), ("max", rm.max))
                     if v is not None]
+    vectors += [(f"particles.spheres[{i}].centre", sp.centre)
+                for i, sp in enumerate(scene.particles.spheres)]
+    for il, ld in enumerate(scene.loads):
+        if ld.side == "surface" and ld.range is not None:
+            raise _Rule(f"loads[{il}].range", ld.range, "not with side = 'surface' (every "
+                        "exposed face is loaded)")
+    if scene.verification.reference == "cryer":
+        check_cryer(scene)
     for key, v in vectors:
         if len(v) != dim:
             raise _Rule(key, v, f"needs {dim} components in a {dim}D scene (dim = {dim}; "
                         "a 3D scene gives [x, y, z], a 2D one [x, y])")
     b = scene.boundaries
+    if dim == 2 and scene.particles.spheres:
+        raise _Rule("particles.spheres", f"{len(scene.particles.spheres)} given",
+                    "3D only (a 2D scene takes polygons)")
     if dim == 2 and scene.decomposition.axis == "z":
         raise _Rule("decomposition.axis", "z", "3D only (a 2D scene cuts slabs along x or y)")
     if dim == 2:
@@ -157,6 +168,19 @@ def check_dimension(scene) -> None:
             raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "
                         "particles.blocks, particles.meshes (closed surfaces), box sides, a "
                         "level water table)")
+
+
+def check_cryer(scene) -> None:
+    """`verification.reference = "cryer"`: one sphere, one load on its surface, a probe
+    named "centre" (`psph/verify/cryer.py`)."""
+    key = "verification.reference"
+    if scene.dim != 3 or len(scene.particles.spheres) != 1:
+        raise _Rule(key, "cryer", "needs a 3D scene with exactly one [[particles.spheres]]")
+    if len(scene.loads) != 1 or scene.loads[0].side != "surface":
+        raise _Rule(key, "cryer", "needs exactly one [[loads]] with side = 'surface'")
+    if "centre" not in scene.output.probes:
+        raise _Rule(key, "cryer", "needs output.probes.centre (the particle nearest the "
+                    "sphere's centre)")
 
 
 def check_integrator(scene) -> None:

@@ -54,6 +54,17 @@ class Polygon(_Model):
                                  "the first material")
 
 
+class Sphere(_Model):
+    """A ball of soil (3D): the domain lattice points within `radius` of `centre`; a
+    domain box that cuts it through its centre with slip walls makes a half, quarter or
+    eighth of it (Cryer's sphere as an octant)."""
+
+    centre: Vec = Field(description="Centre [x, y, z] [m]")
+    radius: Pos = Field(description="Radius [m]")
+    material: str | None = Field(None, description="Name of a [[materials]] table; default "
+                                 "the first material")
+
+
 class MeshGeometry(_Model):
     """Soil from any mesh file meshio reads: particles on the domain lattice inside its
     triangles and quads (2D, x-y plane), or in 3D inside the volume a closed surface
@@ -89,6 +100,8 @@ class Particles(_Model):
                                        "filled with soil on the domain lattice")
     layers: list[Layer] = Field([], description="Soil between two ground profiles of a "
                                 "cross-section, on the domain lattice")
+    spheres: list[Sphere] = Field([], description="Balls of soil on the domain lattice "
+                                  "(3D only)")
 
 
 
@@ -96,8 +109,10 @@ class Particles(_Model):
 class Load(_Model):
     """Distributed normal pressure on the outer particle layer of one side (Pa)."""
 
-    side: Literal["left", "right", "front", "back", "bottom", "top"] = Field(
-        "top", description="Side of the box the pressure acts on (front, back: 3D only)")
+    side: Literal["left", "right", "front", "back", "bottom", "top", "surface"] = Field(
+        "top", description="Side of the box the pressure acts on (front, back: 3D only), or "
+        "\"surface\": every exposed lattice face of the soil not against a wall (a uniform "
+        "confinement of any shape)")
     pressure: float = Field(description="Normal pressure on the side's outer layer: held "
                             "after the ramp, or the p of p (1 − cos ωt) [Pa]")
     history: Literal["ramp", "harmonic"] = Field(
@@ -238,9 +253,11 @@ class Output(_Model):
 
 class Verification(_Model):
     # collapse: run-out, final height and back scarp in summary.json (psph.verify.collapse)
-    reference: Literal["none", "terzaghi", "harmonic", "strip_footing", "collapse"] = Field(
+    reference: Literal["none", "terzaghi", "harmonic", "strip_footing", "collapse",
+                       "cryer"] = Field(
         "none", description="Reference compared at the end: \"none\", \"terzaghi\", "
-        "\"harmonic\", \"strip_footing\", \"collapse\"")
+        "\"harmonic\", \"strip_footing\", \"collapse\", \"cryer\" (the probe \"centre\" "
+        "against Cryer's series)")
     tv: list[Pos] = Field([], description="Time factors T_v at which to snapshot and "
                           "compare [-]")
 

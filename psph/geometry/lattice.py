@@ -121,8 +121,8 @@ class Fill:
 
 
 class Fill3D:
-    """The closed surface meshes of a 3D scene (`particles.meshes`), read once, and the
-    domain lattice points inside them (`solids.inside_surface`), in lattice order (x
+    """The closed surface meshes (`particles.meshes`, read once) and the spheres of a 3D
+    scene, and the domain lattice points inside them (`solids.inside_surface`), in lattice order (x
     fastest, then y, then z). Every process evaluates the whole mask of the meshes'
     bounding box (a bool a lattice point: 10^7 points in 10 MB)."""
 
@@ -131,16 +131,21 @@ class Fill3D:
         dx = scene.particles.dx
         self.surfaces = [read_surface(m.file, f"particles.meshes[{i}].file")
                          for i, m in enumerate(pa.meshes)]
-        self.indices = [material_index(scene, m.material) for m in pa.meshes]
-        self.empty = not self.surfaces
+        self.spheres = [(np.array(sp.centre, float), sp.radius) for sp in pa.spheres]
+        self.indices = [material_index(scene, m.material) for m in (*pa.meshes, *pa.spheres)]
+        self.empty = not (self.surfaces or self.spheres)
         if self.empty:
             return
         axes = lattice_axes(scene.domain.min, scene.domain.max, dx)
-        pts = np.concatenate([p for p, _ in self.surfaces])
+        pts = np.concatenate([p for p, _ in self.surfaces]
+                             + [np.stack([c - r, c + r]) for c, r in self.spheres])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         self.idx = [np.flatnonzero((c >= lo[d]) & (c <= hi[d])) for d, c in enumerate(axes)]
         self.axes = [c[i] for c, i in zip(axes, self.idx, strict=True)]
         masks = [inside_surface(*self.axes, p, t, dx) for p, t in self.surfaces]
+        zz, yy, xx = np.meshgrid(self.axes[2], self.axes[1], self.axes[0], indexing="ij")
+        masks += [(xx - c[0]) ** 2 + (yy - c[1]) ** 2 + (zz - c[2]) ** 2 <= r * r
+                  for c, r in self.spheres]
         self.mask = np.logical_or.reduce(masks)
         self.material = np.zeros(self.mask.shape)
         for m, k in zip(masks, self.indices, strict=True):
@@ -152,6 +157,37 @@ class Fill3D:
         xs, ys, zs = self.axes
         x = np.column_stack([xs[ii], ys[jj], zs[kk]])
         return x, np.arange(len(x), dtype=np.int64), self.material[kk, jj, ii]
+
+
+def occupancy(scene):
+    """A test of which points (k, dim) hold soil: inside a block's box, or a domain
+    lattice point of the fill (the polygons, meshes and layers; in 3D the closed
+    surfaces' mask). For the exposed faces of a surface load (`physics.initial`)."""
+    dx = scene.particles.dx
+    boxes = [(np.array(b.min) - 1e-9, np.array(b.max) + 1e-9) for b in scene.particles.blocks]
+    fill3 = Fill3D(scene) if scene.dim == 3 else None
+    fill = Fill(scene) if scene.dim == 2 else None
+
+    def occupied(points: np.ndarray) -> np.ndarray:
+        taken = np.zeros(len(points), bool)
+        for lo, hi in boxes:
+            taken |= np.all((points >= lo) & (points <= hi), axis=1)
+        if fill is not None and not fill.empty:
+            taken |= fill.mask(points)
+        if fill3 is not None and not fill3.empty:
+            idx, ok = [], np.ones(len(points), bool)
+            for d in range(3):
+                c = fill3.axes[d]
+                j = np.round((points[:, d] - c[0]) / dx).astype(np.int64) if len(c) else \
+                    np.zeros(len(points), np.int64)
+                ok &= (j >= 0) & (j < len(c))
+                idx.append(np.clip(j, 0, max(len(c) - 1, 0)))
+            hit = np.zeros(len(points), bool)
+            hit[ok] = fill3.mask[idx[2][ok], idx[1][ok], idx[0][ok]]
+            taken |= hit
+        return taken
+
+    return occupied
 
 
 def material_index(scene, name: str | None) -> int:

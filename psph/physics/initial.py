@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from psph.geometry.box import outward_normal, side_planes
-from psph.geometry.lattice import SERIAL, extent, seed
+from psph.geometry.lattice import SERIAL, extent, occupancy, seed
 from psph.geometry.profiles import read_profile
 from psph.geometry.shapes import surface_layer
 from psph.physics.material import lame
@@ -69,6 +69,13 @@ def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | No
             data["drained_from"][layer] = np.minimum(data["drained_from"][layer],
                                                      b.drained_from)
     for i, load in enumerate(scene.loads):
+        if load.side == "surface":
+            traction = exposed_faces(scene, x)
+            layer = np.any(traction != 0.0, axis=1)
+            data["load_index"][layer] = i
+            data["traction"][layer] = traction[layer]
+            data["surface"][layer] = 1.0
+            continue
         layer = surface_layer(x, load.side, dx, bounds)
         if load.range is not None:
             along = x[:, 1] if load.side in ("left", "right") else x[:, 0]
@@ -81,6 +88,32 @@ def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | No
     if scene.initial.undrained_load:
         undrained_load(scene, data)
     return data
+
+
+def exposed_faces(scene, x: np.ndarray) -> np.ndarray:
+    """The area vectors -n dA (dA = dx^(dim-1)) of the particles' lattice faces that are
+    exposed: whose neighbour across the face holds no soil and is not beyond a wall of the
+    box (a slip wall is a symmetry plane). A uniform pressure on them is a uniform
+    confinement of any shape, exactly: the faces close the particles' union, so the
+    tractions balance and leave q inside (`loads.side = "surface"`, Cryer's sphere)."""
+    dx = scene.particles.dx
+    dim = scene.dim
+    occupied = occupancy(scene)
+    lo, hi = np.array(scene.domain.min, float), np.array(scene.domain.max, float)
+    walls = {(axis, end) for side, (axis, end, _) in side_planes(dim).items()
+             if getattr(scene.boundaries, side).motion != "free"}
+    area = dx * dx if dim == 3 else dx
+    out = np.zeros((len(x), dim))
+    for d in range(dim):
+        for sgn, end in ((-1.0, 0), (1.0, 1)):
+            nb = x.copy()
+            nb[:, d] += sgn * dx
+            beyond = nb[:, d] < lo[d] if end == 0 else nb[:, d] > hi[d]
+            exposed = ~occupied(nb)
+            if (d, end) in walls:
+                exposed &= ~beyond
+            out[exposed, d] -= sgn * area
+    return out
 
 
 def undrained_load(scene, data: dict[str, np.ndarray]) -> None:

@@ -4,7 +4,7 @@ snapshots and histories. Nothing here runs a scene or reads a scene file."""
 
 import numpy as np
 
-from psph.verify import terzaghi
+from psph.verify import cryer, terzaghi
 from psph.verify.harmonic import from_scene
 from psph.verify.strip import loaded_half_width, undrained_pressure
 
@@ -26,6 +26,8 @@ def history_errors(scene, hist: dict[str, np.ndarray], probes: dict[str, tuple])
         return _harmonic(scene, hist, probes)
     if ref == "strip_footing":
         return _strip(scene, hist, probes)
+    if ref == "cryer":
+        return cryer.centre_errors(scene, hist["time"], hist["p_centre"])
     return None
 
 

@@ -155,3 +155,37 @@ def radial_centre_pressure(cryer: Cryer, taus: np.ndarray, cells: int = 300,
             tau += dtau
         out.append(p[0])
     return np.array(out)
+
+
+def from_scene(scene) -> Cryer:
+    """The sphere of a `cryer` scene: its one [[particles.spheres]], the load on its
+    surface, the (first) material."""
+    m = scene.material
+    return Cryer(radius=scene.particles.spheres[0].radius, load=scene.loads[0].pressure,
+                 young=m.E, poisson=m.nu, porosity=m.porosity, bulk_water=m.K_l,
+                 conductivity=m.k, gamma_l=m.rho_l * m.g_ref)
+
+
+def centre_errors(scene, t: np.ndarray, p: np.ndarray) -> dict:
+    """The centre probe's pressure history p(t) against the series, timed from the
+    middle of the load's ramp: the peak (value and time) of each, and the largest
+    difference over p0 after the ramp (the whole curve)."""
+    ref = from_scene(scene)
+    ramp = scene.loads[0].ramp
+    after = t > ramp
+    ts = t[after] - 0.5 * ramp
+    pa = ref.centre_pressure(ts)
+    k, ka = int(np.argmax(p[after])), int(np.argmax(pa))
+    dense = np.linspace(1e-4, 0.3, 3000) / ref.cv * ref.radius ** 2
+    pd = ref.centre_pressure(dense)
+    kd = int(np.argmax(pd))
+    peak, peak_ref = float(p[after][k]), float(pd[kd])
+    return {"reference": "Cryer's series at the centre (psph.verify.cryer)",
+            "p0_Pa": ref.p0, "cv_m2_per_s": ref.cv,
+            "peak_over_p0": peak / ref.p0, "reference_peak_over_p0": peak_ref / ref.p0,
+            "peak_error": peak / peak_ref - 1.0,
+            "peak_time_s": float(ts[k]), "reference_peak_time_s": float(dense[kd]),
+            "peak_time_error": float(ts[k] / dense[kd] - 1.0),
+            "reference_peak_time_sampled_s": float(ts[ka]),
+            "max_abs_error_over_p0": float(np.max(np.abs(p[after] - pa)) / ref.p0),
+            "time_factor_end": float(ref.time_factor(ts[-1]))}
