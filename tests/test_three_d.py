@@ -228,3 +228,36 @@ def test_spheres_are_3d_only():
     r = run_cli("validate", "terzaghi", "--set",
                 "particles.spheres=[{centre=[0.0, 0.0], radius=0.1}]")
     assert r.returncode == 2 and "particles.spheres" in r.stderr and "3D only" in r.stderr
+
+
+def test_radial_collapse_metrics_and_lube_law():
+    """`verify.collapse_3d`: the run-out radius is the 99.8th percentile of the distance
+    from the axis, the final height the top near the axis; Lube et al.'s law at both
+    branches."""
+    from psph.verify.collapse_3d import lube_runout, radial_metrics
+
+    rng = np.random.default_rng(0)
+    r = np.sqrt(rng.random(20000)) * 2.0  # a uniform disc of radius 2
+    th = rng.random(20000) * np.pi / 2
+    z = 0.3 * (1 - r / 2)  # a cone 0.3 high
+    x = np.column_stack([r * np.cos(th), r * np.sin(th), z])
+    m = radial_metrics(x, (0.0, 0.0), 0.05)
+    assert abs(m["runout_radius_m"] - np.percentile(r, 99.8)) < 1e-12
+    assert abs(m["final_height_m"] - (z[r < 0.1].max() + 0.025)) < 1e-12
+    assert lube_runout(0.5) == pytest.approx(0.62) and lube_runout(4.0) == pytest.approx(3.2)
+
+
+def test_collapse_3d_quarter_column_spreads(tmp_path):
+    """The quarter cylinder of `collapse_3d` (CI size: dx = 0.1 m, 0.3 s): it spreads
+    radially and sinks, every particle stays on the floor's side and inside the
+    quarter, and summary.json carries Lube et al.'s comparison."""
+    scene = load_scene("collapse_3d", ["particles.dx=0.1", "time.end=0.3",
+                                       "output.interval=0.1"])
+    s = run(scene, tmp_path / "out", quiet=True)
+    c = s["errors"]["collapse_3d"]
+    assert c["aspect_ratio"] == 0.5 and c["lube_runout_normalised"] == pytest.approx(0.62)
+    assert c["runout_normalised"] > 0.05 and c["final_height_m"] < 0.5
+    from psph.io.snapshots import read_snapshots
+
+    last = read_snapshots(tmp_path / "out" / "particles.h5")[-1]
+    assert len(last["id"]) == s["particles"] and last["x"].min() > 0.0

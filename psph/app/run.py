@@ -24,6 +24,7 @@ from psph.solver.boundary import halo_width
 from psph.solver.simulation import Simulation
 from psph.verify import history_errors, reference_times
 from psph.verify.collapse import collapse_verification
+from psph.verify.collapse_3d import axisymmetric_verification
 from psph.verify.errors import TerzaghiMonitor
 
 CONTROL_EVERY = 20  # steps between the collective checks (failure, stop signal, wall clock)
@@ -366,7 +367,8 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, prob
         cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
         verification = history_errors(scene, cols, {k: pos for k, (_, pos) in probes.items()})
     if scene.verification.reference == "collapse" and status == "finished":
-        verification = collapse_verification(out / "particles.h5", scene, slabs.comm)
+        verify = axisymmetric_verification if scene.dim == 3 else collapse_verification
+        verification = verify(out / "particles.h5", scene, slabs.comm)
         if history:
             verification["p_max_Pa"] = max(r["p_max"] for r in history)
             verification["p_min_Pa"] = min(r["p_min"] for r in history)

@@ -140,7 +140,7 @@ def check_materials(scene) -> list[Material]:
                                 f"the pore fluid is one fluid: must equal materials[0].{fk} "
                                 f"= {getattr(mats[0], fk)!r}")
     pa = scene.particles
-    for kind in ("blocks", "polygons", "meshes", "layers", "spheres"):
+    for kind in ("blocks", "polygons", "meshes", "layers", "spheres", "cylinders"):
         for i, src in enumerate(getattr(pa, kind)):
             if src.material is not None and src.material not in names:
                 known = ", ".join(repr(n) for n in names) or "none: [material] has no name"

@@ -34,7 +34,7 @@ def check_scene(scene):
         if hi[d] <= lo[d]:
             raise _Rule(f"domain.max[{d}]", hi[d], f"must exceed domain.min[{d}] = {lo[d]}")
     pa = scene.particles
-    if not (pa.blocks or pa.polygons or pa.meshes or pa.layers or pa.spheres):
+    if not (pa.blocks or pa.polygons or pa.meshes or pa.layers or pa.spheres or pa.cylinders):
         raise _Rule("particles", "no blocks, polygons, meshes or layers",
                     "give at least one [[particles.blocks]], [[particles.polygons]], "
                     "[[particles.meshes]] or [[particles.layers]]")
@@ -133,20 +133,27 @@ def check_dimension(scene) -> None:
                     if v is not None]
     vectors += [(f"particles.spheres[{i}].centre", sp.centre)
                 for i, sp in enumerate(scene.particles.spheres)]
+    vectors += [(f"particles.cylinders[{i}].base", cy.base)
+                for i, cy in enumerate(scene.particles.cylinders)]
     for il, ld in enumerate(scene.loads):
         if ld.side == "surface" and ld.range is not None:
             raise _Rule(f"loads[{il}].range", ld.range, "not with side = 'surface' (every "
                         "exposed face is loaded)")
     if scene.verification.reference == "cryer":
         check_cryer(scene)
+    if scene.verification.reference == "collapse" and dim == 3 \
+            and len(scene.particles.cylinders) != 1:
+        raise _Rule("verification.reference", "collapse", "in 3D needs exactly one "
+                    "[[particles.cylinders]] (the axisymmetric collapse)")
     for key, v in vectors:
         if len(v) != dim:
             raise _Rule(key, v, f"needs {dim} components in a {dim}D scene (dim = {dim}; "
                         "a 3D scene gives [x, y, z], a 2D one [x, y])")
     b = scene.boundaries
-    if dim == 2 and scene.particles.spheres:
-        raise _Rule("particles.spheres", f"{len(scene.particles.spheres)} given",
-                    "3D only (a 2D scene takes polygons)")
+    for kind in ("spheres", "cylinders"):
+        if dim == 2 and getattr(scene.particles, kind):
+            raise _Rule(f"particles.{kind}", f"{len(getattr(scene.particles, kind))} given",
+                        "3D only (a 2D scene takes polygons)")
     if dim == 2 and scene.decomposition.axis == "z":
         raise _Rule("decomposition.axis", "z", "3D only (a 2D scene cuts slabs along x or y)")
     if dim == 2:

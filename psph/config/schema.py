@@ -65,6 +65,18 @@ class Sphere(_Model):
                                  "the first material")
 
 
+class Cylinder(_Model):
+    """An upright cylinder of soil (3D): the domain lattice points within `radius` of the
+    vertical axis through `base` and between base[2] and base[2] + height; slip walls
+    through the axis make a half or a quarter of it (the axisymmetric collapse)."""
+
+    base: Vec = Field(description="Centre of the base [x, y, z] [m]")
+    radius: Pos = Field(description="Radius [m]")
+    height: Pos = Field(description="Height [m]")
+    material: str | None = Field(None, description="Name of a [[materials]] table; default "
+                                 "the first material")
+
+
 class MeshGeometry(_Model):
     """Soil from any mesh file meshio reads: particles on the domain lattice inside its
     triangles and quads (2D, x-y plane), or in 3D inside the volume a closed surface
@@ -102,6 +114,8 @@ class Particles(_Model):
                                 "cross-section, on the domain lattice")
     spheres: list[Sphere] = Field([], description="Balls of soil on the domain lattice "
                                   "(3D only)")
+    cylinders: list[Cylinder] = Field([], description="Upright cylinders of soil on the "
+                                      "domain lattice (3D only)")
 
 
 

@@ -121,10 +121,11 @@ class Fill:
 
 
 class Fill3D:
-    """The closed surface meshes (`particles.meshes`, read once) and the spheres of a 3D
-    scene, and the domain lattice points inside them (`solids.inside_surface`), in lattice order (x
-    fastest, then y, then z). Every process evaluates the whole mask of the meshes'
-    bounding box (a bool a lattice point: 10^7 points in 10 MB)."""
+    """The closed surface meshes (`particles.meshes`, read once), the spheres and the
+    cylinders of a 3D scene, and the domain lattice points inside them
+    (`solids.inside_surface`), in lattice order (x fastest, then y, then z). Every process
+    evaluates the whole mask of their bounding box (a bool a lattice point: 10^7 points in
+    10 MB)."""
 
     def __init__(self, scene):
         pa = scene.particles
@@ -132,13 +133,18 @@ class Fill3D:
         self.surfaces = [read_surface(m.file, f"particles.meshes[{i}].file")
                          for i, m in enumerate(pa.meshes)]
         self.spheres = [(np.array(sp.centre, float), sp.radius) for sp in pa.spheres]
-        self.indices = [material_index(scene, m.material) for m in (*pa.meshes, *pa.spheres)]
-        self.empty = not (self.surfaces or self.spheres)
+        self.cylinders = [(np.array(cy.base, float), cy.radius, cy.height)
+                          for cy in pa.cylinders]
+        self.indices = [material_index(scene, m.material)
+                        for m in (*pa.meshes, *pa.spheres, *pa.cylinders)]
+        self.empty = not (self.surfaces or self.spheres or self.cylinders)
         if self.empty:
             return
         axes = lattice_axes(scene.domain.min, scene.domain.max, dx)
         pts = np.concatenate([p for p, _ in self.surfaces]
-                             + [np.stack([c - r, c + r]) for c, r in self.spheres])
+                             + [np.stack([c - r, c + r]) for c, r in self.spheres]
+                             + [np.stack([c - [r, r, 0], c + [r, r, h]])
+                                for c, r, h in self.cylinders])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         self.idx = [np.flatnonzero((c >= lo[d]) & (c <= hi[d])) for d, c in enumerate(axes)]
         self.axes = [c[i] for c, i in zip(axes, self.idx, strict=True)]
@@ -146,6 +152,8 @@ class Fill3D:
         zz, yy, xx = np.meshgrid(self.axes[2], self.axes[1], self.axes[0], indexing="ij")
         masks += [(xx - c[0]) ** 2 + (yy - c[1]) ** 2 + (zz - c[2]) ** 2 <= r * r
                   for c, r in self.spheres]
+        masks += [((xx - c[0]) ** 2 + (yy - c[1]) ** 2 <= r * r) & (zz >= c[2])
+                  & (zz <= c[2] + h) for c, r, h in self.cylinders]
         self.mask = np.logical_or.reduce(masks)
         self.material = np.zeros(self.mask.shape)
         for m, k in zip(masks, self.indices, strict=True):
