@@ -50,7 +50,7 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
         paths.append(_harmonic_picture(out, scene, snaps))
     elif ref == "strip_footing":
         paths.append(_strip_picture(out, scene, snaps))
-    elif ref == "collapse":
+    elif ref == "collapse" and scene.dim == 2:  # 3D: the section, plan and perspective
         paths.append(_collapse_picture(out, scene, snaps))
     elif ref == "cryer":
         paths.append(_cryer_picture(out, scene))
