@@ -261,3 +261,18 @@ def test_collapse_3d_quarter_column_spreads(tmp_path):
 
     last = read_snapshots(tmp_path / "out" / "particles.h5")[-1]
     assert len(last["id"]) == s["particles"] and last["x"].min() > 0.0
+
+
+def test_export_vtu_of_a_3d_run(small_column):
+    """`psph export --format vtu` of a 3D run: one VTU a snapshot with 3D points, the
+    6-component stress and the 3-component u, v (meshio reads them back)."""
+    import meshio
+
+    out, summary = small_column
+    r = run_cli("export", str(out), "--format", "vtu")
+    assert r.returncode == 0, r.stderr
+    files = sorted((out / "vtu").glob("*.vtu"))
+    assert len(files) == 3
+    mesh = meshio.read(files[-1])
+    assert mesh.points.shape == (summary["particles"], 3)
+    assert mesh.point_data["stress"].shape == (800, 6) and mesh.point_data["u"].shape == (800, 3)
