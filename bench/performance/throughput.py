@@ -156,6 +156,12 @@ def measure(sim, steps: int, warm: int) -> float:
     return seconds
 
 
+def _bytes(sim) -> float:
+    """The running state's bytes per owned particle (store, scratch, pair lists), the
+    largest over the ranks (`Simulation.state_bytes`)."""
+    return sim.slabs.allreduce_max(sim.state_bytes() / max(sim.store.n_owned, 1))
+
+
 def main() -> None:
     from mpi4py import MPI
 
@@ -175,7 +181,7 @@ def main() -> None:
         rows.append({"case": f"coupled elastic TPI step, N = {sim.n_global}",
                      "particles": sim.n_global, "steps": steps, "seconds": secs,
                      "particle_steps_per_s_per_core": rate / ranks,
-                     "steps_per_s": steps / secs})
+                     "steps_per_s": steps / secs, "bytes_per_particle": _bytes(sim)})
     for w, hgt, steps in ((0.2, 0.4, 10), (0.3, 0.6, 5)):
         text = BLOCK_3D.format(n=int(round(w * w * hgt * 1e6)), w=w, hgt=hgt)
         scene = resolve(validate(tomllib.loads(text)))
@@ -184,7 +190,7 @@ def main() -> None:
         rows.append({"case": f"3D coupled elastic TPI step, N = {sim.n_global}", "dim": 3,
                      "particles": sim.n_global, "steps": steps, "seconds": secs,
                      "particle_steps_per_s_per_core": sim.n_global * steps / secs / ranks,
-                     "steps_per_s": steps / secs})
+                     "steps_per_s": steps / secs, "bytes_per_particle": _bytes(sim)})
     text = COLLAPSE_3D.format(n=27000, w=0.6, far=1.8)
     scene = resolve(validate(tomllib.loads(text)))
     sim = Simulation(scene, make_slabs(scene, comm))
@@ -193,7 +199,7 @@ def main() -> None:
     rows.append({"case": f"3D elastoplastic collapse step, N = {sim.n_global}", "dim": 3,
                  "particles": sim.n_global, "steps": steps, "seconds": secs,
                  "particle_steps_per_s_per_core": sim.n_global * steps / secs / ranks,
-                 "steps_per_s": steps / secs})
+                 "steps_per_s": steps / secs, "bytes_per_particle": _bytes(sim)})
     scene = load_scene("terzaghi_tpi", ["pressure.explicit_until=0.0",
                                     "boundaries.top.drained_from=0.0"])
     sim = Simulation(scene, make_slabs(scene, comm))
@@ -202,15 +208,16 @@ def main() -> None:
     rows.append({"case": f"Terzaghi column (TPI), N = {sim.n_global}",
                  "particles": sim.n_global, "steps": steps, "seconds": secs,
                  "particle_steps_per_s_per_core": sim.n_global * steps / secs / ranks,
-                 "steps_per_s": steps / secs})
+                 "steps_per_s": steps / secs, "bytes_per_particle": _bytes(sim)})
     if comm.Get_rank() == 0:
         print(f"\npsph throughput on {ranks} rank(s), {platform.processor() or 'cpu'}, "
               f"{date.today()}")
         print(f"{'case':48s} {'steps':>6s} {'wall s':>8s} {'p-steps/s/core':>15s} "
-              f"{'steps/s':>9s}")
+              f"{'steps/s':>9s} {'bytes/particle':>14s}")
         for r in rows:
             print(f"{r['case']:48s} {r['steps']:6d} {r['seconds']:8.3f} "
-                  f"{r['particle_steps_per_s_per_core']:15,.0f} {r['steps_per_s']:9.1f}")
+                  f"{r['particle_steps_per_s_per_core']:15,.0f} {r['steps_per_s']:9.1f} "
+                  f"{r['bytes_per_particle']:14,.0f}")
         OUT.mkdir(exist_ok=True)
         meta = {"date": str(date.today()), "ranks": ranks, "machine": platform.node(),
                 "python": sys.version.split()[0], "rows": rows}

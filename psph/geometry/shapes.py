@@ -52,6 +52,16 @@ def inside_mesh(points: np.ndarray, file: str) -> np.ndarray:
 def read_mesh(file: str) -> tuple[np.ndarray, np.ndarray]:
     """(xy (k, 2), triangles (m, 3)) of a mesh file's triangles and quads (each quad as
     two triangles), read by meshio; SceneError (one line) if it cannot be used."""
+    points, tri = mesh_triangles(file, f"particles.meshes: {file}")
+    if not len(tri):
+        raise SceneError(f"particles.meshes: {file}: no triangle or quad cells")
+    return points[:, :2], tri
+
+
+def mesh_triangles(file: str, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """(points (k, dim), triangles (m, 3), empty if none) of a mesh file's triangles and
+    quads (each quad as two triangles), read by meshio; SceneError "<where>: meshio cannot
+    read it (...)" (one line) if it cannot be read."""
     import contextlib
     import io
 
@@ -62,19 +72,15 @@ def read_mesh(file: str) -> tuple[np.ndarray, np.ndarray]:
             mesh = meshio.read(file)
     except (Exception, SystemExit) as e:
         reason = (str(e).strip().splitlines() or [type(e).__name__])[0][:120]
-        raise SceneError(f"particles.meshes: {file}: meshio cannot read it ({reason})") \
-            from None
-    xy = mesh.points[:, :2]
-    tris = []
+        raise SceneError(f"{where}: meshio cannot read it ({reason})") from None
+    tris = [np.zeros((0, 3), np.int64)]
     for block in mesh.cells:
         if block.type.startswith("triangle"):
             tris.append(block.data[:, :3])
         elif block.type.startswith("quad"):
             q = block.data[:, :4]
             tris += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
-    if not tris:
-        raise SceneError(f"particles.meshes: {file}: no triangle or quad cells")
-    return xy, np.concatenate(tris)
+    return np.asarray(mesh.points, float), np.concatenate(tris).astype(np.int64)
 
 
 def inside_triangles(points: np.ndarray, xy: np.ndarray, tri: np.ndarray) -> np.ndarray:

@@ -8,12 +8,10 @@ dx, so that it never passes exactly through an edge or a vertex of a mesh whose 
 lie on the lattice (a crossing on an edge shared by two faces would count twice).
 """
 
-import contextlib
-import io
-
 import numpy as np
 
 from psph.errors import SceneError
+from psph.geometry.shapes import mesh_triangles
 
 RAY_OFFSET = (0.5 ** 0.5 * 1e-4, 3 ** 0.5 * 1e-4)  # of dx, in x and y
 
@@ -21,31 +19,16 @@ RAY_OFFSET = (0.5 ** 0.5 * 1e-4, 3 ** 0.5 * 1e-4)  # of dx, in x and y
 def read_surface(file: str, key: str) -> tuple[np.ndarray, np.ndarray]:
     """(points (k, 3), triangles (m, 3)) of a closed surface mesh; SceneError with one
     line naming `key` if meshio cannot read it, it has no faces, or it is not closed."""
-    import meshio
-
-    try:  # meshio prints its own complaints and may exit: keep the one-line rule
-        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
-            mesh = meshio.read(file)
-    except (Exception, SystemExit) as e:
-        reason = (str(e).strip().splitlines() or [type(e).__name__])[0][:120]
-        raise SceneError(f"{key} = {file!r}: meshio cannot read it ({reason})") from None
-    tris = []
-    for block in mesh.cells:
-        if block.type.startswith("triangle"):
-            tris.append(block.data[:, :3])
-        elif block.type.startswith("quad"):
-            q = block.data[:, :4]
-            tris += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
-    if not tris or mesh.points.shape[1] != 3:
+    points, tri = mesh_triangles(file, f"{key} = {file!r}")
+    if not len(tri) or points.shape[1] != 3:
         raise SceneError(f"{key} = {file!r}: no triangle or quad faces in 3D (a surface "
                          "mesh closing the soil's volume is needed)")
-    tri = np.concatenate(tris).astype(np.int64)
     open_edges = _open_edges(tri)
     if open_edges:
         raise SceneError(f"{key} = {file!r}: the surface is not closed ({open_edges} edges "
                          "are not shared by exactly two faces); a volume needs a closed "
                          "surface")
-    return np.asarray(mesh.points, float), tri
+    return points, tri
 
 
 def _open_edges(tri: np.ndarray) -> int:
