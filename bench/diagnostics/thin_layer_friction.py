@@ -1,0 +1,114 @@
+"""Thin layers on a fixed floor (issue 37, collapse_3d's runaway layer): a dry
+Drucker-Prager layer of n rows (phi = 30 degrees, c = 100 Pa, psi = 0), 4 m long, on a fixed floor
+under gravity tilted by theta (an inclined floor), a slip wall upslope and a free toe.
+Below theta = phi a layer should stay (the wall's shear stress bounded by c + sigma_n
+tan(phi) holds it); the bench prints the mean downslope speed of the layer's middle
+(x from 1 to 3 m) after 0.5 s for each thickness and tilt.
+
+    .venv/bin/python bench/diagnostics/thin_layer_friction.py      # ~3 min, one rank
+
+Writes bench/out/thin_layer_friction.json and .png.
+"""
+
+import json
+import math
+import platform
+import tempfile
+import tomllib
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+from psph.app.run import run
+from psph.config.load import resolve, validate
+from psph.io.snapshots import read_snapshots
+
+OUT = Path(__file__).resolve().parents[1] / "out"
+DX = 0.05
+SCENE = """
+name = "thin_layer"
+gravity = [{gx}, {gz}]
+[domain]
+min = [0.0, 0.0]
+max = [8.0, 1.0]
+[particles]
+dx = {dx}
+[[particles.blocks]]
+min = [0.0, 0.0]
+max = [4.0, {h}]
+[material]
+model = "drucker_prager"
+E = 20.0e6
+nu = 0.3
+porosity = 0.4
+rho_s = 2650.0
+k = 1.0e-3
+[material.plasticity]
+phi = 30.0
+c = {c}
+c_r = {c}
+eta = 0.0
+psi = 0.0
+[boundaries]
+left = {{ motion = "slip" }}
+bottom = {{ motion = "fixed" }}
+[initial]
+k0 = 0.5
+[pressure]
+scheme = "none"
+[time]
+integrator = "symplectic"
+cfl_solid = 0.3
+end = {end}
+[output]
+interval = {end}
+[stabilisation]
+av_alpha = 1.0
+"""
+
+
+def main() -> None:
+    rows_out = []
+    work = Path(tempfile.mkdtemp(prefix="psph-thin-"))
+    for theta in (0.0, 15.0, 25.0):
+        for rows in (1, 2, 4, 8):
+            g = 9.81
+            text = SCENE.format(gx=g * math.sin(math.radians(theta)),
+                                gz=-g * math.cos(math.radians(theta)), dx=DX, h=rows * DX,
+                                c=100.0, end=0.5)
+            scene = resolve(validate(tomllib.loads(text)))
+            out = work / f"t{theta:g}_r{rows}"
+            run(scene, out, quiet=True)
+            last = read_snapshots(out / "particles.h5")[-1]
+            x0 = last["x"][:, 0] - last["u"][:, 0]
+            middle = (x0 > 1.0) & (x0 < 3.0)  # away from the wall and the free toe
+            u = float(np.mean(last["v"][middle, 0]))
+            rows_out.append({"theta_deg": theta, "rows": rows, "mean_speed_m_s": u,
+                             "max_speed_m_s": float(np.abs(last["v"][middle, 0]).max()),
+                             "time_s": last["time"]})
+            print(f"theta {theta:4.1f} deg, {rows} rows: mean downslope v {u:9.4f} m/s "
+                  f"(at rest expected: theta < phi = 30)")
+    OUT.mkdir(exist_ok=True)
+    (OUT / "thin_layer_friction.json").write_text(json.dumps(
+        {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows_out},
+        indent=1))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5, 3.4))
+    for theta in sorted({r["theta_deg"] for r in rows_out}):
+        sel = [r for r in rows_out if r["theta_deg"] == theta]
+        ax.plot([r["rows"] for r in sel], [r["mean_speed_m_s"] for r in sel], "o-",
+                label=f"tilt {theta:g} deg")
+    ax.set(xscale="log", xlabel="rows in the layer", ylabel="mean downslope v at 0.5 s (m/s)",
+           title="a layer on a fixed floor, phi = 30 deg, c = 100 Pa")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(OUT / "thin_layer_friction.png", dpi=110)
+
+
+if __name__ == "__main__":
+    main()
