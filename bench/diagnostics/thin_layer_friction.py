@@ -6,6 +6,8 @@ tan(phi) holds it); the bench prints the mean downslope speed of the layer's mid
 (x from 1 to 3 m) after 0.5 s for each thickness and tilt.
 
     .venv/bin/python bench/diagnostics/thin_layer_friction.py      # ~3 min, one rank
+    .venv/bin/python bench/diagnostics/thin_layer_friction.py --probe  # the bottom row's
+        # stresses against time at 15 degrees, 1 and 8 rows (~1 min)
 
 Writes bench/out/thin_layer_friction.json and .png.
 """
@@ -68,6 +70,39 @@ av_alpha = 1.0
 """
 
 
+def probe() -> None:
+    """The bottom row's shear and normal stress, its Drucker-Prager bound c + sigma_n
+    tan(phi) on the shear, the shear the floor must carry (rho g sin(theta) h) and the
+    layer's speed, at 15 degrees for 1 and 8 rows."""
+    from mpi4py import MPI
+
+    from psph.app.run import make_slabs
+    from psph.solver.simulation import Simulation
+
+    theta, g = 15.0, 9.81
+    print("rows  t (s)  tau_xy  sigma_yy  bound  needed  v_x (m/s)")
+    for rows in (1, 8):
+        text = SCENE.format(gx=g * math.sin(math.radians(theta)),
+                            gz=-g * math.cos(math.radians(theta)), dx=DX, h=rows * DX,
+                            c=100.0, end=0.5)
+        scene = resolve(validate(tomllib.loads(text)))
+        sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))
+        for k in range(1500):
+            sim.advance_one()
+            if k in (0, 50, 400, 1499):
+                st = sim.store
+                n = st.n_owned
+                x = st.x[:n]
+                mid = (x[:, 0] > 1.0) & (x[:, 0] < 3.0)
+                bottom = mid & (x[:, 1] < DX)
+                s = st.stress[:n]
+                bound = 100.0 - s[bottom, 1].mean() * math.tan(math.radians(30.0))
+                needed = st.rho[0] * g * math.sin(math.radians(theta)) * rows * DX
+                print(f"{rows:4d} {sim.t:6.3f} {s[bottom, 3].mean():7.1f} "
+                      f"{s[bottom, 1].mean():9.1f} {bound:6.1f} {needed:7.1f} "
+                      f"{st.v[:n][mid, 0].mean():9.4f}")
+
+
 def main() -> None:
     rows_out = []
     work = Path(tempfile.mkdtemp(prefix="psph-thin-"))
@@ -111,4 +146,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    probe() if "--probe" in sys.argv else main()
