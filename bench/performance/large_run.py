@@ -7,6 +7,7 @@ rank against the rank count.
     python bench/performance/large_run.py                 # dx 0.0009: ~25 min, 12 GB at 1 rank
     python bench/performance/large_run.py --dx 0.004      # a rehearsal at 0.5M particles (a minute)
     python bench/performance/large_run.py --plot-only
+    python bench/performance/large_run.py --scene collapse_3d --dx 0.0058   # 2.0M in 3D
 
 Each case is one `mpirun -n R python -m psph run collapse_dry`; its summary.json gives the
 set-up seconds, the seconds per step of the time loop (the snapshot and checkpoint writes
@@ -34,15 +35,18 @@ MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
 STEPS = 100
 
 
+SCENE = "collapse_dry"  # `--scene`
+
+
 def solid_dt(dx: float) -> float:
     from psph.config.load import load_scene
     from psph.solver.stepping import time_stepping
 
-    return time_stepping(load_scene("collapse_dry", [f"particles.dx={dx}"])).dt_main
+    return time_stepping(load_scene(SCENE, [f"particles.dx={dx}"])).dt_main
 
 
 def mpirun(label: str, ranks: int, out: Path, *settings: str, restart: bool = False) -> dict:
-    cmd = ["mpirun", "-n", str(ranks), sys.executable, "-m", "psph", "run", "collapse_dry",
+    cmd = ["mpirun", "-n", str(ranks), sys.executable, "-m", "psph", "run", SCENE,
            "--out", str(out), "--quiet"]
     for s in settings:
         cmd += ["--set", s]
@@ -75,7 +79,7 @@ def mpirun(label: str, ranks: int, out: Path, *settings: str, restart: bool = Fa
 def measure(dx: float) -> list[dict]:
     dt = solid_dt(dx)
     end = STEPS * dt * (1 - 1e-9)
-    base = OUT / "large_run"
+    base = OUT / f"large_run_{SCENE}"
     shutil.rmtree(base, ignore_errors=True)
     rows = []
     run = base / "run"
@@ -106,7 +110,7 @@ def table(rows: list[dict]) -> None:
               f"{max(peaks) / peak1:7.2f}")
 
 
-def plot(rows: list[dict]) -> Path:
+def plot(rows: list[dict], stem: str = "large_run") -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -127,11 +131,11 @@ def plot(rows: list[dict]) -> Path:
         a.set_xticks(ranks)
         a.grid(True, alpha=0.3)
         a.legend()
-    fig.suptitle(f"bench/performance/large_run.py, dry collapse, {sel[0]['particles']:,} "
+    fig.suptitle(f"bench/performance/large_run.py, {SCENE}, {sel[0]['particles']:,} "
                  "particles, "
                  f"{date.today()}, {platform.node()}")
     fig.tight_layout()
-    path = OUT / "large_run.png"
+    path = OUT / f"{stem}.png"
     fig.savefig(path, dpi=110)
     return path
 
@@ -139,19 +143,25 @@ def plot(rows: list[dict]) -> Path:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--dx", type=float, default=0.0009)
+    ap.add_argument("--scene", default="collapse_dry",
+                    help="a built-in scene (default collapse_dry; collapse_3d for 3D)")
     ap.add_argument("--plot-only", action="store_true")
     args = ap.parse_args(argv)
+    global SCENE
+    SCENE = args.scene
     OUT.mkdir(exist_ok=True)
-    path = OUT / "large_run.json"
+    stem = "large_run" if SCENE == "collapse_dry" else f"large_run_{SCENE}"
+    path = OUT / f"{stem}.json"
     if args.plot_only:
         rows = json.loads(path.read_text())["rows"]
     else:
         rows = measure(args.dx)
         path.write_text(json.dumps({"date": str(date.today()), "machine": platform.node(),
-                                    "cpus": os.cpu_count(), "dx": args.dx, "rows": rows},
+                                    "cpus": os.cpu_count(), "scene": SCENE, "dx": args.dx,
+                                    "rows": rows},
                                    indent=1) + "\n")
     table(rows)
-    print(f"wrote {path} and {plot(rows)}")
+    print(f"wrote {path} and {plot(rows, stem)}")
     return 0
 
 
