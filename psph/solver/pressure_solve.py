@@ -182,7 +182,7 @@ class PressureSolve:
         recycled = self.recycled
         r0 = None
         if recycled.size:
-            free = ~fixed[:n]
+            free = recycled.free_rows(fixed, n, st.cap)
             basis = (st.recycle_x, st.recycle_sx)
             recycled.start(tuple(sim.drainage.planes[:, 3]) if sim.drainage.has_planes
                            else ())

@@ -44,6 +44,7 @@ class RecycledGuess:
         self._e = np.zeros(0)
         self._se = np.zeros(0)
         self.r0 = np.zeros(0)  # the solve's first residual (`pcg`'s r0_out)
+        self._free = np.zeros(0, np.bool_)
         self._ints = np.zeros(size + 1, np.int64)
         self._total = np.zeros(size + 1, np.int64)
         self.resets = 0
@@ -61,6 +62,12 @@ class RecycledGuess:
     def _scratch(self, cap: int) -> None:
         if self._e.shape[0] < cap:
             self._x0, self._e, self._se, self.r0 = (np.zeros(cap) for _ in range(4))
+            self._free = np.zeros(cap, np.bool_)
+
+    def free_rows(self, fixed: np.ndarray, n: int, cap: int) -> np.ndarray:
+        """The owned rows that are not imposed (no allocation per step)."""
+        self._scratch(cap)
+        return np.logical_not(fixed[:n], out=self._free[:n])
 
     def _reduce(self, slabs, m: float, n_global: int, fill) -> float | None:
         """The scale of the rounded terms from the largest one over all ranks (m, this
