@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
+from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
 from psph.kernels.interactions import pair_sums
 from psph.kernels.neighbours import cell_lists  # noqa: F401  (tests import it from here)
 from psph.kernels.sum_columns import MOMENT, NSUMS
@@ -42,7 +42,8 @@ def sums_for(x, h, vol, v=None, p=None, stress=None, perm=None, poro=None, rho=N
     par = PairParams(h, tpi_alpha=alpha, coupled=coupled, p_weight=p_weight,
                      record=pairs is not None).typed()
     n_pairs = pair_sums(n, n if n_owned is None else n_owned, n if n_real is None else n_real,
-                        fields, Cells(cell_start, order, ncell), par, sums, PairRecord(*record))
+                        fields, sorted_cells(cell_start, order, ncell, x), par, sums,
+                        PairRecord(*record))
     return sums if pairs is None else (sums, n_pairs)
 
 

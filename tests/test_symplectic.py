@@ -53,7 +53,7 @@ def test_velocity_sweep_over_recorded_pairs_equals_pair_sums(n_ghost):
 
 
 def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():
-    from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
     from psph.kernels.interactions import pair_sums
     from psph.kernels.sum_columns import NSUMS
     from tests.helpers import cell_lists
@@ -67,7 +67,7 @@ def test_a_short_pair_list_is_reported_and_the_sums_stay_complete():
         sums = z((n, NSUMS))
         fields = PairFields(x, z((n, 2)), z((n, 2)), z((n, 4)), z(n), z(n), np.full(n, 0.4),
                             np.full(n, dx * dx), np.ones(n), np.ones(n), z((n, 2)), z((n, 3)))
-        got = pair_sums(n, n, n, fields, Cells(cell_start, order, ncell),
+        got = pair_sums(n, n, n, fields, sorted_cells(cell_start, order, ncell, x),
                         PairParams(h, record=True).typed(), sums,
                         PairRecord(z((cap, 2), np.int64), z((cap, 2))))
         out.append((got, sums))

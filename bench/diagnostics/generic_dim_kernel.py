@@ -150,7 +150,7 @@ def cloud(dim: int, side: int, seed: int = 0):
 def fused_sweeps(hand_pair_sums) -> list[dict]:
     """The fused pair sweep (`pair_sums`, cell lists and all the sums of a coupled step)
     hand-written (HAND_WRITTEN) and from the factory, interleaved, on a 2D cloud."""
-    from psph.kernels.bundles import Cells, PairFields, PairParams, PairRecord
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
     from psph.kernels.interactions import pair_sums
 
     rng = np.random.default_rng(1)
@@ -164,7 +164,7 @@ def fused_sweeps(hand_pair_sums) -> list[dict]:
                         rng.uniform(0.3, 0.5, n), np.full(n, dx * dx),
                         rng.uniform(1.8e3, 2e3, n), rng.uniform(1e-4, 2e-4, n),
                         rng.normal(size=(n, 2)), np.zeros((n, 3)))
-    cells = Cells(*cell_lists(x, h))
+    cells = sorted_cells(*cell_lists(x, h), x)
     par = PairParams(h, 0.5, 1.0, 0.0, 20.0, 0.0, -9810.0, True, False, 0.0, 1.0, 1.0,
                      True).typed()
     rec = PairRecord(np.zeros((30 * n, 2), np.int64), np.zeros((30 * n, 2)))

@@ -30,10 +30,21 @@ class PairFields(NamedTuple):
 
 class Cells(NamedTuple):
     """Cell list of `neighbours.bin_particles`: rows order[cell_start[c]:cell_start[c + 1]]
-    lie in cell c of the ncell[0] x ncell[1] grid."""
+    lie in cell c of the ncell[0] x ncell[1] (x ncell[2]) grid; x_sorted[s] = x[order[s]],
+    the positions in slot order, so the sweep's distance tests read memory in sequence
+    (`neighbours.gather_sorted`)."""
     cell_start: np.ndarray
     order: np.ndarray
     ncell: np.ndarray
+    x_sorted: np.ndarray
+
+
+def sorted_cells(cell_start: np.ndarray, order: np.ndarray, ncell: np.ndarray,
+                 x: np.ndarray) -> Cells:
+    """`Cells` of a cell list and the positions it sorts (tests and drivers; the time loop
+    fills its own x_sorted)."""
+    n = int(cell_start[int(np.prod(ncell))])
+    return Cells(cell_start, order, ncell, np.ascontiguousarray(x[order[:n]]))
 
 
 class PairRecord(NamedTuple):

@@ -42,6 +42,34 @@ def add_outer(sums, i, c, dim, w, x0, x1, x2, g0, g1, g2):
 
 
 @nb.njit(cache=True, inline="always")
+def add_moment(sums, i, c, dim, w, x0, x1, x2, g0, g1, g2):
+    """A pair's share of the moment matrix M = sum_j V_j x_ij (x) grad W_ij of Eq. (22):
+    `add_outer` in 2D (its bits); in 3D only the upper triangle, as grad W_ij is parallel
+    to x_ij and M is symmetric (`mirror_moment` fills the rest after the sweep)."""
+    if dim == 2:
+        add_outer(sums, i, c, dim, w, x0, x1, x2, g0, g1, g2)
+    else:
+        w0 = w * x0
+        w1 = w * x1
+        sums[i, c] += w0 * g0
+        sums[i, c + 1] += w0 * g1
+        sums[i, c + 2] += w0 * g2
+        sums[i, c + 4] += w1 * g1
+        sums[i, c + 5] += w1 * g2
+        sums[i, c + 8] += w * x2 * g2
+
+
+@nb.njit(cache=True)
+def mirror_moment(sums, n, c):
+    """The lower triangle of the 3x3 moment matrices in sums[:n, c:c + 9] from the upper
+    (`add_moment`)."""
+    for i in range(n):
+        sums[i, c + 3] = sums[i, c + 1]
+        sums[i, c + 6] = sums[i, c + 2]
+        sums[i, c + 7] = sums[i, c + 5]
+
+
+@nb.njit(cache=True, inline="always")
 def velocity_differences(v, v_slip, a, b, ghost_pair, dim):
     """(dv0, dv1, dv2, ds0, ds1, ds2): v_b - v_a, and the free-slip v_slip_b - v_slip_a on a
     pair with a wall ghost (else dv); the third components 0 in 2D."""

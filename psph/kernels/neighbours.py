@@ -48,6 +48,35 @@ def half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start):
 
 
 @nb.njit(cache=True, inline="always")
+def half_stencil_rows(dim: int) -> int:
+    """Slot ranges r of `forward_slots` to visit: 2 in 2D, 5 in 3D."""
+    return 2 if dim == 2 else 5
+
+
+@nb.njit(cache=True, inline="always")
+def forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim):
+    """The r-th run of sorted slots (s0, s1) of the half stencil of slot sa in cell
+    c = (cx, cy, cz), or (0, 0) outside the grid. Cells are numbered x fastest, so the
+    half stencil's cells that share a row are consecutive, and so are their slots:
+    r = 0 is the rest of cell c and cell (+1, 0, 0); r = 1 the row (-1..+1, +1, 0);
+    in 3D r = 2-4 the rows (-1..+1, -1..+1, +1). The slots come in the order of
+    `half_stencil_3d` (k = 0..13), so a loop over them visits the same pairs in the
+    same order with one bounds check per row instead of one per cell."""
+    xlo = cx - 1 if cx > 0 else 0
+    xhi = cx + 1 if cx < ncx - 1 else ncx - 1
+    if r == 0:
+        return sa + 1, cell_start[c + 1 + xhi - cx]
+    if r == 1 or dim == 2:
+        ny, nz = cy + 1, cz
+    else:
+        ny, nz = cy + r - 3, cz + 1
+    if ny < 0 or ny >= ncy or nz >= ncz:
+        return 0, 0
+    row = (nz * ncy + ny) * ncx
+    return cell_start[row + xlo], cell_start[row + xhi + 1]
+
+
+@nb.njit(cache=True, inline="always")
 def half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start):
     """`half_stencil_3d` of a 2D grid, spelt out (the 2D pair loops run it for every
     particle): k = 0: the rest of cell c after slot sa; then (+1, 0), (-1, +1), (0, +1),
@@ -80,6 +109,15 @@ def _clamped_cell(c, origin, cell_size, lo, hi):
     if f >= hi:
         return hi
     return int(np.floor(f))
+
+
+@nb.njit(cache=True)
+def gather_sorted(x, order, n, out):
+    """out[s] = x[order[s]] for slots s < n: positions in the cell list's slot order."""
+    for s in range(n):
+        o = order[s]
+        for d in range(x.shape[1]):
+            out[s, d] = x[o, d]
 
 
 @nb.njit(cache=True)

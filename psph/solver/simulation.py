@@ -123,6 +123,7 @@ class Simulation(Stages):
         self.fill = np.zeros(1024, np.int64)
         self.cell_of = np.zeros(self.store.cap, np.int64)
         self.order = np.zeros(self.store.cap, np.int64)
+        self.x_sorted = np.zeros((self.store.cap, dim))
         lay = self.layout = sum_layout(dim)
         # the Darcy sums (Q .. SUM_APSI) and the stress divergence, scaled by the lattice
         # moment after the sweep (`Stages._interactions`)

@@ -20,7 +20,7 @@ from psph.kernels.bundles import (
 )
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import symmetric_gradient_sums
-from psph.kernels.neighbours import bin_particles, grid_bounds
+from psph.kernels.neighbours import bin_particles, gather_sorted, grid_bounds
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.shifting import (
     FREE_TRACE,
@@ -182,7 +182,11 @@ class Stages:
             artificial_stress(st.n_total, st.stress, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
         fields = fields_of(PairFields, st.arrays, v_slip=self.v_slip, astress=self.astress)
-        cells = Cells(self.cell_start, self.order, self.ncell)
+        n_slots = int(self.cell_start[int(np.prod(self.ncell))])
+        if self.x_sorted.shape[0] < n_slots:
+            self.x_sorted = np.zeros((st.cap, self.dim))
+        gather_sorted(st.x, self.order, n_slots, self.x_sorted)
+        cells = Cells(self.cell_start, self.order, self.ncell, self.x_sorted)
         par = PairParams(self.h, alpha, sb.av_alpha, sb.av_beta, self.av_sound_speed,
                          rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
                          as_n, self.w_dx, self.p_weight, self.record_pairs,

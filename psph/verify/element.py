@@ -47,7 +47,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from psph.kernels.bundles import (
-    Cells,
     PairFields,
     PairParams,
     PairRecord,
@@ -55,6 +54,7 @@ from psph.kernels.bundles import (
     SurfaceLoads,
     UpdateFields,
     fields_of,
+    sorted_cells,
 )
 from psph.kernels.interactions import pair_sums
 from psph.kernels.neighbours import cell_lists
@@ -306,7 +306,7 @@ class _SphBlock:
         z = np.zeros
         pair_sums(self.n, self.n, self.n,
                   fields_of(PairFields, st, v=v, v_slip=v, astress=z((self.n, 3))),
-                  Cells(*cells), PairParams(self.h).typed(), self.sums,
+                  sorted_cells(*cells, st["x"]), PairParams(self.h).typed(), self.sums,
                   PairRecord(z((0, 2), np.int64), z((0, 2))))
         fields = fields_of(UpdateFields, st, v=v, poro0=self.poro0, vol0=self.vol0,
                            drained_from=self.drained_from, material=self.material)
