@@ -276,3 +276,42 @@ def test_export_vtu_of_a_3d_run(small_column):
     mesh = meshio.read(files[-1])
     assert mesh.points.shape == (summary["particles"], 3)
     assert mesh.point_data["stress"].shape == (800, 6) and mesh.point_data["u"].shape == (800, 3)
+
+
+def test_saturated_slab_is_the_2d_collapse_extruded(tmp_path):
+    """`collapse_saturated_3d` (CI size: dx = 0.08 m, 4 particles thick, 0.01 s): between
+    free-slip walls the slab's mirror ghosts continue the lattice, so every one of its
+    four y-layers carries the same x-z field (p, u, stress) to round-off: the plane-strain
+    state of the 2D scene, through which its metrics are read (`plane_strain_view`: the
+    same initial height as the 2D scene's, no checkerboard index). How close it comes to
+    the 2D scene is the full runs' question (bench/verification/collapse_saturated_3d.py):
+    in these first 0.01 s both are in the transient of the released face, which TPI
+    carries one kernel support a step, and the 3D spline summed across the slab is not
+    the 2D spline."""
+    from psph.io.snapshots import read_snapshots
+
+    common = ["particles.dx=0.08", "time.end=0.01", "output.interval=0.01"]
+    s3 = run(load_scene("collapse_saturated_3d", common + [
+        "domain.max=[12.0, 0.32, 3.0]",
+        "particles.blocks=[{min=[0.0, 0.0, 0.0], max=[4.0, 0.32, 2.0]}]"]),
+        tmp_path / "3d", quiet=True)
+    s2 = run(load_scene("collapse_saturated_psi0", common), tmp_path / "2d", quiet=True)
+    m3, m2 = s3["metrics"]["collapse"], s2["metrics"]["collapse"]
+    assert m3["initial_height_m"] == pytest.approx(m2["initial_height_m"], abs=1e-12)
+    assert m3["runout_m"] > 0.0 and m2["runout_m"] > 0.0
+    assert s3["metrics"]["pressure_quality"]["over_run"]["checkerboard_p_all_max"] is None
+    n_2d = s2["particles"]
+    b = read_snapshots(tmp_path / "3d" / "particles.h5")[-1]
+    x0 = b["x"] - b["u"]
+    layer = np.round(x0[:, 1] / 0.08 - 0.5).astype(int)
+    assert sorted(set(layer)) == [0, 1, 2, 3]
+    site = np.round(x0[:, [0, 2]] / 0.04).astype(int)
+    by_site = {}
+    for i, k in enumerate(map(tuple, site)):
+        by_site.setdefault(k, []).append(i)
+    groups = np.array([sorted(g, key=lambda i: layer[i]) for g in by_site.values()])
+    assert groups.shape == (n_2d, 4)
+    for name, scale in (("p", np.abs(b["p"]).max()), ("u", np.abs(b["u"]).max()),
+                        ("stress", np.abs(b["stress"]).max())):
+        f = b[name][groups]  # (sites, layers, ...)
+        assert np.abs(f - f[:, :1]).max() <= 1e-9 * scale, name

@@ -367,7 +367,8 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, prob
         cols = {k: np.array([r.get(k, np.nan) for r in history]) for k in history[0]}
         verification = history_errors(scene, cols, {k: pos for k, (_, pos) in probes.items()})
     if scene.verification.reference == "collapse" and status == "finished":
-        verify = axisymmetric_verification if scene.dim == 3 else collapse_verification
+        axisymmetric = scene.dim == 3 and len(scene.particles.cylinders) == 1
+        verify = axisymmetric_verification if axisymmetric else collapse_verification
         verification = verify(out / "particles.h5", scene, slabs.comm)
         if history:
             verification["p_max_Pa"] = max(r["p_max"] for r in history)

@@ -118,6 +118,22 @@ def check_scene(scene):
     return scene
 
 
+def check_collapse_3d(scene) -> None:
+    """A 3D collapse is either axisymmetric (exactly one [[particles.cylinders]],
+    `verify/collapse_3d.py`) or a plane-strain slab (blocks only, between slip walls at the
+    front and the back: the 2D metrics in the x-z plane, `verify/collapse.py`)."""
+    p = scene.particles
+    if len(p.cylinders) == 1:
+        return
+    b = scene.boundaries
+    slab = (not p.cylinders and not p.spheres and not p.meshes and p.blocks
+            and all(getattr(b, side).motion == "slip" for side in ("front", "back")))
+    if not slab:
+        raise _Rule("verification.reference", "collapse", "in 3D needs exactly one "
+                    "[[particles.cylinders]] (the axisymmetric collapse) or blocks between "
+                    "slip walls at the front and the back (a plane-strain slab)")
+
+
 def check_dimension(scene) -> None:
     """Every point and vector of the scene has `dim` components; in 3D the sources and
     boundaries that are 2D only so far are refused, in 2D the 3D-only sides."""
@@ -141,10 +157,8 @@ def check_dimension(scene) -> None:
                         "exposed face is loaded)")
     if scene.verification.reference == "cryer":
         check_cryer(scene)
-    if scene.verification.reference == "collapse" and dim == 3 \
-            and len(scene.particles.cylinders) != 1:
-        raise _Rule("verification.reference", "collapse", "in 3D needs exactly one "
-                    "[[particles.cylinders]] (the axisymmetric collapse)")
+    if scene.verification.reference == "collapse" and dim == 3:
+        check_collapse_3d(scene)
     for key, v in vectors:
         if len(v) != dim:
             raise _Rule(key, v, f"needs {dim} components in a {dim}D scene (dim = {dim}; "

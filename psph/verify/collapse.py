@@ -45,6 +45,21 @@ def collapse_metrics(x: np.ndarray, x0: np.ndarray, dx: float, comm=None) -> dic
             "initial_height_m": h0, "final_height_m": height, "back_scarp_m": scarp}
 
 
+def plane_strain_view(snap: dict) -> dict:
+    """A 3D slab's snapshot (x, u as (N, 3), the 6-component stress xx yy zz xy yz zx) in the
+    x-z plane of its 2D counterpart: x and u as (N, 2) (x, z) and the stress in the 2D
+    order xx, yy (vertical), zz (out of plane), xy, so the 2D metrics read it unchanged.
+    A 2D snapshot is returned as it is."""
+    if snap["x"].shape[1] != 3:
+        return snap
+    out = dict(snap)
+    out["x"] = snap["x"][:, [0, 2]]
+    out["u"] = snap["u"][:, [0, 2]]
+    if "stress" in snap:
+        out["stress"] = snap["stress"][:, [0, 2, 1, 5]]
+    return out
+
+
 def _max(a: np.ndarray, comm) -> float:
     """The largest of all ranks' values (-inf if none)."""
     return comm.allreduce(float(a.max()) if len(a) else -np.inf, op=MPI.MAX)
@@ -139,21 +154,24 @@ def collapse_verification(path, scene, comm) -> dict:
     dx = scene.particles.dx
     coupled = scene.pressure.scheme != "none"
     names = ("id", "x", "u", "p", "stress") if coupled else ("x", "u")
+    thickness = scene.domain.max[1] - scene.domain.min[1] if scene.dim == 3 else 1.0
     snaps, rows = [], []
     with h5py.File(path, "r") as f:
         for name in sorted(f["snapshots"]):
             g = f["snapshots"][name]
             work = all(k in g for k in ("plastic_work", "vol"))  # older files lack them
-            snap = read_share(g, names + (("plastic_work", "vol") if work else ()), comm)
+            snap = plane_strain_view(
+                read_share(g, names + (("plastic_work", "vol") if work else ()), comm))
             snap["time"] = float(g.attrs["time"])
             m = collapse_metrics(snap["x"], snap["x"] - snap["u"], dx, comm)
             m["time_s"] = snap["time"]
-            # dissipated plastic work per metre (plane strain), the same bits on any ranks
+            # dissipated plastic work per metre (plane strain; a 3D slab's over its
+            # thickness), the same bits on any ranks
             m["plastic_work_J_per_m"] = exact_dot(snap["plastic_work"], snap["vol"], comm) \
-                if work else None
+                / thickness if work else None
             snaps.append(m)
             if coupled:
-                rows.append(snapshot_quality(snap, scene, comm))
+                rows.append(snapshot_quality(snap, scene, comm, checkerboard=scene.dim == 2))
     out = {"collapse": series_block(snaps, rows), "time_s": snaps[-1]["time_s"]}
     out["collapse"].update(slides_from(np.array(out["collapse"]["series"]["time_s"]),
                                        np.array(out["collapse"]["series"]["back_scarp_m"]),

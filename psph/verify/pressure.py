@@ -97,7 +97,7 @@ def hydrostatic_pressure(x: np.ndarray, scene, surface_y: np.ndarray | float | N
     x = np.asarray(x, dtype=float).reshape(-1, 2)
     if scene.initial.water_table is None:
         return np.zeros(len(x))
-    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    gamma = scene.material.rho_l * float(np.linalg.norm(scene.gravity))
     return gamma * np.maximum(table_level(x, scene, surface_y, comm) - x[:, 1], 0.0)
 
 
@@ -127,7 +127,7 @@ def wet_threshold(scene) -> float:
     """The pore pressure (Pa) of PHREATIC_ROWS rows of water, gamma_l 2 dx: above it a
     particle is below the phreatic line; |p| below it is drained, -p above it suction
     (the particle-scale noise of p is smaller)."""
-    return PHREATIC_ROWS * scene.material.rho_l * float(np.hypot(*scene.gravity)) \
+    return PHREATIC_ROWS * scene.material.rho_l * float(np.linalg.norm(scene.gravity)) \
         * scene.particles.dx
 
 
@@ -141,7 +141,7 @@ def phreatic_level(x: np.ndarray, p: np.ndarray, scene, comm=None) -> np.ndarray
     Fig. 16 text: "a well-defined curvature phreatic line, above which the pore-water
     pressure is zero"); elsewhere it is the table."""
     x = np.asarray(x, dtype=float).reshape(-1, 2)
-    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    gamma = scene.material.rho_l * float(np.linalg.norm(scene.gravity))
     dx = scene.particles.dx
     wet = p > wet_threshold(scene)
     head = np.where(wet, x[:, 1] + p / gamma, -np.inf)
@@ -155,7 +155,7 @@ def phreatic_excess(snap: dict, scene, comm=None) -> np.ndarray:
     excess pore-water pressure in this case)"), `excess_pressure` where the line is the
     table. Collective over `comm` like `excess_pressure`."""
     x = np.asarray(snap["x"], dtype=float).reshape(-1, 2)
-    gamma = scene.material.rho_l * float(np.hypot(*scene.gravity))
+    gamma = scene.material.rho_l * float(np.linalg.norm(scene.gravity))
     level = phreatic_level(x, snap["p"], scene, comm)
     return snap["p"] - gamma * np.maximum(level - x[:, 1], 0.0)
 
@@ -269,13 +269,15 @@ def _num(v: float) -> float | None:
     return None if v is None or not math.isfinite(v) else float(v)
 
 
-def snapshot_quality(snap: dict, scene, comm=None) -> dict:
+def snapshot_quality(snap: dict, scene, comm=None, checkerboard: bool = True) -> dict:
     """Pressure quality of one snapshot: percentiles and extremes of the excess pressure
     (with the particle's id and position), the 99th percentiles of |excess over the
     phreatic line| and of the suction, and the checkerboard index of p and p' over all
     particles and over the debris (moved more than 5 dx from x - u, the initial place).
     `snap` may hold this rank's share of the rows (collective over `comm`; the same
-    numbers on any number of ranks but for the rounding of the checkerboard's sums)."""
+    numbers on any number of ranks but for the rounding of the checkerboard's sums).
+    checkerboard = False leaves the checkerboard indices out (None): a 3D slab seen in its
+    x-z plane (`collapse.plane_strain_view`) has its particles' rows on top of each other."""
     comm = MPI.COMM_SELF if comm is None else comm
     x = snap["x"]
     ids = snap["id"] if "id" in snap else np.arange(len(x))
@@ -297,6 +299,10 @@ def snapshot_quality(snap: dict, scene, comm=None) -> dict:
     out.update({"excess_min_Pa": ex_min, "excess_min_id": id_min, "excess_min_x_m": x_min,
                 "excess_max_Pa": ex_max, "excess_max_id": id_max, "excess_max_x_m": x_max,
                 "debris_particles": n_debris})
+    if not checkerboard:
+        for name in ("p", "p_eff"):
+            out[f"checkerboard_{name}_all"] = out[f"checkerboard_{name}_debris"] = None
+        return out
     xs, fs, n_owned = with_halo(x, {"p": snap["p"],
                                     "p_eff": mean_effective_stress(snap["stress"]),
                                     "debris": debris.astype(float)}, 2.0 * scene.h, comm)

@@ -1,0 +1,121 @@
+"""The plane-strain check of 3D (issue 37): the saturated column collapse of Section 4.4 as
+a slab 4 dx thick between free-slip walls (`collapse_saturated_3d`) against the 2D scene
+at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
+
+    python bench/verification/collapse_saturated_3d.py             # runs all six (~2.5 h)
+    python bench/verification/collapse_saturated_3d.py --psi 0     # one angle
+    python bench/verification/collapse_saturated_3d.py --reuse     # tables finished runs
+
+The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
+runs/collapse_saturated_3d/psi<psi>_2d and _3d (`--reuse` keeps a finished one). Compared:
+the run-out at the end (`metrics.collapse.runout_m`, the toe's 99.8th percentile of x
+minus the initial front) and the largest 99th percentile of |excess p| over the snapshots
+(`metrics.pressure_quality.over_run.abs_excess_p99_max_Pa`; the slab's are read in its x-z
+plane, psph/verify/collapse.py `plane_strain_view`). The issue's bar: within 5 % of 2D.
+Prints a table, writes bench/out/collapse_saturated_3d.json and .png (run-out and p99
+of |excess| against time, 2D lines, 3D markers).
+"""
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+from datetime import date
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+OUT = ROOT / "bench" / "out"
+RUNS = ROOT / "runs" / "collapse_saturated_3d"
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "NUMBA_NUM_THREADS": "1"}
+PSIS = ("-5", "0", "2.5")
+BAR = 0.05
+
+
+def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
+    summary = out / "summary.json"
+    if reuse and summary.is_file() and json.loads(summary.read_text())["status"] == "finished":
+        return json.loads(summary.read_text())
+    cmd = [sys.executable, "-m", "psph", "run", scene, "--out", str(out), "--quiet"]
+    for s in settings:
+        cmd += ["--set", s]
+    if ranks > 1:
+        cmd = ["mpirun", "-n", str(ranks)] + cmd
+    print("  " + " ".join(cmd[cmd.index("psph") - 2:] if ranks == 1 else cmd), flush=True)
+    r = subprocess.run(cmd, cwd=ROOT, env={**os.environ, **MPI_ENV}, capture_output=True,
+                       text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
+    return json.loads(summary.read_text())
+
+
+def numbers(s: dict) -> dict:
+    m, q = s["metrics"]["collapse"], s["metrics"]["pressure_quality"]
+    return {"runout_m": m["runout_m"], "final_height_m": m["final_height_m"],
+            "abs_excess_p99_max_Pa": q["over_run"]["abs_excess_p99_max_Pa"],
+            "excess_p99_max_Pa": q["over_run"]["excess_p99_max_Pa"],
+            "particles": s["particles"], "ranks": s["ranks"], "wall_time_s": s["wall_time_s"],
+            "series": {"time_s": m["series"]["time_s"], "runout_m": m["series"]["runout_m"],
+                       "abs_excess_p99_Pa": q["series"]["abs_excess_p99_Pa"]}}
+
+
+def plot(rows: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for k, (psi, r) in enumerate(rows.items()):
+        c = f"C{k}"
+        for dim, style in (("2d", "-"), ("3d", "o")):
+            sr = r[dim]["series"]
+            lab = f"psi = {psi}, {dim.upper()}"
+            ax1.plot(sr["time_s"], sr["runout_m"], style, color=c, label=lab, mfc="none")
+            ax2.plot(sr["time_s"], [v / 1e3 for v in sr["abs_excess_p99_Pa"]], style, color=c,
+                     label=lab, mfc="none")
+    ax1.set(xlabel="t (s)", ylabel="run-out (m)", title="run-out")
+    ax2.set(xlabel="t (s)", ylabel="p99 of |excess p| (kPa)", title="99th percentile of |excess p|")
+    ax1.legend(fontsize=7)
+    fig.suptitle("collapse_saturated_3d (slab 4 dx thick, slip walls) against the 2D scenes")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--psi", nargs="*", default=list(PSIS), choices=PSIS)
+    ap.add_argument("--np", type=int, default=2, help="ranks of the 3D runs")
+    ap.add_argument("--reuse", action="store_true", help="keep finished runs")
+    args = ap.parse_args()
+    rows = {}
+    for psi in args.psi:
+        s2 = run(RUNS / f"psi{psi}_2d", f"collapse_saturated_psi{psi}", 1, [], args.reuse)
+        s3 = run(RUNS / f"psi{psi}_3d", "collapse_saturated_3d", args.np,
+                 [f"material.plasticity.psi={float(psi)}"], args.reuse)
+        r2, r3 = numbers(s2), numbers(s3)
+        rows[psi] = {"2d": r2, "3d": r3,
+                     "runout_rel": r3["runout_m"] / r2["runout_m"] - 1.0,
+                     "abs_excess_p99_rel": r3["abs_excess_p99_max_Pa"]
+                     / r2["abs_excess_p99_max_Pa"] - 1.0}
+    print(f"{'psi':>5s} {'run-out 2D':>10s} {'3D':>7s} {'diff':>7s} {'p99|ex| 2D kPa':>15s} "
+          f"{'3D':>7s} {'diff':>7s} {'within 5 %':>10s}")
+    for psi, r in rows.items():
+        ok = abs(r["runout_rel"]) <= BAR and abs(r["abs_excess_p99_rel"]) <= BAR
+        print(f"{psi:>5s} {r['2d']['runout_m']:10.3f} {r['3d']['runout_m']:7.3f} "
+              f"{100 * r['runout_rel']:+6.1f}% {r['2d']['abs_excess_p99_max_Pa'] / 1e3:15.2f} "
+              f"{r['3d']['abs_excess_p99_max_Pa'] / 1e3:7.2f} "
+              f"{100 * r['abs_excess_p99_rel']:+6.1f}% {'yes' if ok else 'NO':>10s}")
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "collapse_saturated_3d.json").write_text(json.dumps(
+        {"date": date.today().isoformat(), "machine": platform.platform(), "rows": rows},
+        indent=1) + "\n")
+    plot(rows, OUT / "collapse_saturated_3d.png")
+    print(f"wrote {OUT / 'collapse_saturated_3d.json'} and .png")
+
+
+if __name__ == "__main__":
+    main()
