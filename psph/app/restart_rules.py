@@ -9,6 +9,9 @@ from psph.errors import SceneError
 
 # Sections a restart may change: they schedule the run, they do not change its physics.
 RESTART_MUTABLE = ("description", "time.end", "output", "checkpoint", "decomposition")
+# Keys that only check the input (`boundaries.<side>.symmetry`, checked on the seeded
+# particles of a fresh run): a checkpoint written before they were set continues.
+CHECK_ONLY = ("symmetry",)
 
 
 def check_restart_scene(saved_toml: str, scene: Scene, label: str) -> None:
@@ -33,6 +36,8 @@ def physics_difference(saved_toml: str, scene: Scene, label: str
     now = _flatten(scene.model_dump(exclude_none=True))
     for key in sorted(set(saved) | set(now)):
         if any(key == m or key.startswith(m + ".") for m in RESTART_MUTABLE):
+            continue
+        if key.startswith("boundaries.") and key.rsplit(".", 1)[-1] in CHECK_ONLY:
             continue
         if saved.get(key) != now.get(key):
             return key, now.get(key), saved.get(key)

@@ -10,12 +10,21 @@ from pathlib import Path
 
 import numpy as np
 
+from psph.app.memory import check_memory
 from psph.app.restart_rules import check_restart_scene
 from psph.config.load import to_toml
+from psph.config.rules import check_symmetry_planes
 from psph.config.schema import Scene
 from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts
-from psph.errors import EARLY_STOP_SIGNALS, Interrupted, NumericalError, OutputError, SceneError
-from psph.geometry.lattice import census, probe_ids
+from psph.errors import (
+    EARLY_STOP_SIGNALS,
+    Interrupted,
+    NumericalError,
+    OutputError,
+    SceneError,
+    SceneRule,
+)
+from psph.geometry.lattice import census, extent, probe_ids
 from psph.io.checkpoint import read_history, read_restart, write_checkpoint
 from psph.io.snapshots import SnapshotWriter, write_xdmf
 from psph.io.space import SNAPSHOT_ROW_BYTES, require_space
@@ -66,6 +75,16 @@ def _check_restart_census(sim: Simulation, path: Path) -> None:
         sim.census.check(sim.store.key[:sim.store.n_owned], sim.step, sim.t)
     except NumericalError as e:
         raise SceneError(f"--restart {path}: corrupt checkpoint ({e})") from None
+
+
+def _check_symmetry_planes(scene: Scene, bounds: np.ndarray) -> None:
+    """Every `symmetry = true` side touches the seeded particles, whose extent over all
+    ranks is `bounds` (the same on every rank, so every rank raises SceneError, exit 2,
+    together)."""
+    try:
+        check_symmetry_planes(scene, bounds)
+    except SceneRule as e:
+        raise SceneError(f"scene '{scene.name}': {e.key} = {e.value!r}: {e.rule}") from None
 
 
 def snapshot_times(scene: Scene) -> list[float]:
@@ -150,6 +169,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     out = Path(out)
     wall0 = time.perf_counter()  # set-up: checkpoint read, slab cuts, particles, ghosts
     meta, state = None, None
+    check_memory(scene, comm)  # before a checkpoint's rows or a lattice are allocated
     if restart is not None:  # read and check before anything is written
         meta, state = _read_restart(restart, scene, comm)
     check_output_directory(out, comm)
@@ -157,14 +177,11 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         else Slabs(_slab_axis(scene), state["cuts"], comm)
     rank0 = slabs.rank == 0
     toml_text = to_toml(scene)
-    if rank0:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "scene.toml").write_text(toml_text)
-    comm.Barrier()
 
     if meta is None:
         sim = Simulation(scene, slabs)
         n = sim.store.n_owned
+        _check_symmetry_planes(scene, extent(sim.store.x[:n], slabs.reducer))
         probes = probe_ids(scene, sim.store.x[:n], sim.store.key[:n], slabs.reducer)
     else:
         sim = Simulation(scene, slabs, state["particles"], t=meta["t"], step=meta["step"],
@@ -173,6 +190,11 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
         _check_restart_census(sim, restart)
         probes = probe_ids(scene, reducer=slabs.reducer, slab=slabs.slab)
     del state
+    # the first output: after every check of the input (exit 2 leaves nothing behind)
+    if rank0:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "scene.toml").write_text(toml_text)
+    comm.Barrier()
     writer = SnapshotWriter(out / "particles.h5", comm, scene.dim, toml_text,
                             resume_step=None if meta is None else sim.step)
     monitor = TerzaghiMonitor(scene, slabs) if scene.verification.reference == "terzaghi" \

@@ -33,6 +33,10 @@ class Boundary(_Model):
         "drained_from)")
     drained_from: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Time a drained side starts to drain; impermeable before [s]")
+    symmetry: bool = Field(
+        False, description="true: the side is a symmetry plane of the problem (a half, "
+        "quarter or octant model); needs motion = \"slip\" and soil within dx of the "
+        "side (a check only: the wall is the same free-slip wall)")
 
 
 class Polyline(_Model):
@@ -91,6 +95,19 @@ class Boundaries(_Model):
     back: Boundary = Field(Boundary(), description="3D only: the side y = domain.max[1]")
     polylines: list[Polyline] = Field([], description="Rigid polylines lined with boundary "
                                       "particles (issue 16)")
+
+    @model_validator(mode="after")
+    def _symmetry(self) -> "Boundaries":
+        """A symmetry plane is a free-slip wall (its mirror ghosts are the other half's
+        particles). Whether the soil touches it is checked on the seeded particles
+        (`psph.config.rules.check_symmetry_planes`)."""
+        for side in ("left", "right", "front", "back", "bottom", "top"):
+            b = getattr(self, side)
+            if b.symmetry and b.motion != "slip":
+                raise SceneRule(f"boundaries.{side}.symmetry", True,
+                                "a symmetry plane is a free-slip wall (motion = \"slip\"), "
+                                f"got motion = \"{b.motion}\"")
+        return self
 
     @model_validator(mode="after")
     def _polylines(self) -> "Boundaries":

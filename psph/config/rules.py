@@ -280,3 +280,28 @@ def check_tpi_stability(scene) -> None:
                     f"TPI gain G = dt gamma_l / (rho k) = {gain:.3g} at dt = {dt:.3e} s "
                     f"is above its stability bound {rule} = {limit:.3g} ({bench}): "
                     f"dt <= {dt * limit / gain:.3e} s; {force}")
+
+
+def check_symmetry_planes(scene, bounds) -> None:
+    """Every box side with `symmetry = true` touches the soil: the seeded particles'
+    extent `bounds` ((2, dim): the smallest and largest coordinate over all ranks,
+    `psph.geometry.lattice.extent`) comes within one dx of its plane (a lattice touching
+    the side has its first row at dx/2). Raises SceneRule naming the side's key, the
+    plane and the nearest particle's coordinate. The same verdict on every rank, as
+    `bounds` is."""
+    dx = scene.particles.dx
+    lo, hi = scene.domain.min, scene.domain.max
+    for side, (axis, end, _) in side_planes(scene.dim).items():
+        if not getattr(scene.boundaries, side).symmetry:
+            continue
+        plane = (lo, hi)[end][axis]
+        near = bounds[end][axis]
+        gap = abs(near - plane)
+        if gap <= dx * (1 + 1e-9):
+            continue
+        name = "xyz"[axis]
+        where = "no particle at all" if not math.isfinite(near) else \
+            f"the nearest at {name} = {near:.6g} m, {gap / dx:.3g} dx away"
+        raise _Rule(f"boundaries.{side}.symmetry", True,
+                    f"the plane {name} = {plane:g} touches no particle ({where}; dx = "
+                    f"{dx:g} m): a symmetry plane needs soil within dx of it")

@@ -167,6 +167,72 @@ class Fill3D:
         return x, np.arange(len(x), dtype=np.int64), self.material[kk, jj, ii]
 
 
+def estimate_count(scene) -> float:
+    """An estimate of the scene's particle count, from its sources' sizes only (no
+    lattice is built, so it costs nothing at any dx): each block's lattice exactly; the
+    fill (polygons, meshes, layers; in 3D spheres, cylinders and closed surfaces) as the
+    volume of its sources over dx^dim: a polygon's area, a sphere's or a cylinder's volume
+    times the share of its bounding box inside the domain (exact for the half, quarter or
+    octant cut through its centre), a mesh's or a layer's bounding box within the domain,
+    and the whole fill at most the box of all its sources within the domain. Overlapping
+    sources are counted twice, a shape's rim to within the lattice's roughness."""
+    dx = scene.particles.dx
+    dim = scene.dim
+    count = 0.0
+    for b in scene.particles.blocks:
+        count += float(np.prod([max(int(round((b.max[d] - b.min[d]) / dx)), 1)
+                                for d in range(dim)]))
+    dom_lo, dom_hi = np.array(scene.domain.min, float), np.array(scene.domain.max, float)
+
+    def clipped(lo, hi) -> float:
+        """Volume of the box [lo, hi] within the domain."""
+        return float(np.prod(np.clip(np.minimum(hi, dom_hi) - np.maximum(lo, dom_lo), 0.0,
+                                     None)))
+
+    def inside(volume, lo, hi) -> float:
+        """`volume` of a shape whose bounding box is [lo, hi], times the box's share in
+        the domain."""
+        box = float(np.prod(np.subtract(hi, lo)))
+        return volume * clipped(lo, hi) / box if box > 0.0 else 0.0
+
+    boxes, volumes = [], []  # each fill source's bounding box and volume estimate
+    pa = scene.particles
+    if dim == 2:
+        fill = Fill(scene)
+        for v in fill.polygons:
+            area = 0.5 * abs(np.dot(v[:, 0], np.roll(v[:, 1], -1))
+                             - np.dot(v[:, 1], np.roll(v[:, 0], -1)))
+            boxes.append((v.min(axis=0), v.max(axis=0)))
+            volumes.append(inside(area, *boxes[-1]))
+        for xy, _ in fill.meshes:
+            boxes.append((xy.min(axis=0), xy.max(axis=0)))
+            volumes.append(clipped(*boxes[-1]))
+        for top, bottom in fill.layers:
+            pts = np.concatenate([top, bottom])
+            boxes.append((pts.min(axis=0), pts.max(axis=0)))
+            volumes.append(clipped(*boxes[-1]))
+    else:
+        from psph.geometry.shapes import mesh_triangles
+
+        for i, m in enumerate(pa.meshes):
+            pts = mesh_triangles(m.file, f"particles.meshes[{i}].file = {m.file!r}")[0]
+            boxes.append((pts.min(axis=0), pts.max(axis=0)))
+            volumes.append(clipped(*boxes[-1]))
+        for sp in pa.spheres:
+            c, r = np.array(sp.centre, float), sp.radius
+            boxes.append((c - r, c + r))
+            volumes.append(inside(4.0 / 3.0 * np.pi * r ** 3, *boxes[-1]))
+        for cy in pa.cylinders:
+            c, r, h = np.array(cy.base, float), cy.radius, cy.height
+            boxes.append((c - [r, r, 0.0], c + [r, r, h]))
+            volumes.append(inside(np.pi * r * r * h, *boxes[-1]))
+    if boxes:
+        lo = np.min([b[0] for b in boxes], axis=0)
+        hi = np.max([b[1] for b in boxes], axis=0)
+        count += min(sum(volumes), clipped(lo, hi)) / dx ** dim
+    return count
+
+
 def occupancy(scene):
     """A test of which points (k, dim) hold soil: inside a block's box, or a domain
     lattice point of the fill (the polygons, meshes and layers; in 3D the closed

@@ -1,0 +1,68 @@
+"""Will the scene's particles fit in this node's memory? Checked before a run reads a
+checkpoint, seeds a particle or writes anything (issue 37: a 3D scene whose particle
+count would not fit is bad input, exit 2, one line, nothing written)."""
+
+from psph.errors import SceneError
+from psph.geometry.lattice import estimate_count
+
+# Bytes of the running state per owned particle (`Simulation.state_bytes`: the particle
+# store, scratch, neighbour and pair lists), measured by `make bench` on 2026-12-05 for
+# the coupled elastic TPI step (docs/performance.md, "3D rows"): 2,083 and 2,072 B in 2D,
+# 4,215 and 4,190 B in 3D. A dry scene takes less (1,725 B for the 3D collapse) and the
+# peak resident memory more (the interpreter, numba and MPI, about 190 MB a rank; the
+# snapshot and checkpoint writes), so the check refuses only what clearly cannot run.
+STATE_BYTES_PER_PARTICLE = {2: 2_100, 3: 4_200}
+
+GIB = 1024.0 ** 3
+
+
+def available_bytes(meminfo: str = "/proc/meminfo") -> float | None:
+    """MemAvailable of this node (bytes), or None where /proc/meminfo cannot tell."""
+    try:
+        with open(meminfo) as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0  # given in kB
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def node_ranks(comm) -> int:
+    """How many ranks of `comm` share this rank's node (its memory; collective)."""
+    from mpi4py import MPI
+
+    try:
+        node = comm.Split_type(MPI.COMM_TYPE_SHARED)
+    except (MPI.Exception, NotImplementedError, AttributeError):
+        return comm.Get_size()
+    try:
+        return node.Get_size()
+    finally:
+        node.Free()
+
+
+def check_memory(scene, comm, available: float | None = None) -> None:
+    """SceneError (exit 2) on every rank if the scene's estimated particle count
+    (`estimate_count`) times STATE_BYTES_PER_PARTICLE, shared evenly among the ranks,
+    exceeds the memory available on some node to the ranks it holds (collective: one
+    allgather, the same verdict and line everywhere). `available`: this node's bytes
+    (default MemAvailable from /proc/meminfo; unknown: no check on that node)."""
+    count = estimate_count(scene)
+    size = comm.Get_size()
+    local = node_ranks(comm)
+    per_particle = STATE_BYTES_PER_PARTICLE[scene.dim]
+    per_rank = count * per_particle / size
+    avail = available_bytes() if available is None else available
+    nodes = comm.allgather((local, avail))
+    short = [(loc, av) for loc, av in nodes if av is not None and per_rank * loc > av]
+    if not short:
+        return
+    loc, av = min(short, key=lambda n: n[1] / n[0])
+    node = "" if loc == 1 else f", {per_rank * loc / GIB:.3g} GiB for the {loc} on one node"
+    raise SceneError(
+        f"scene '{scene.name}': particles.dx = {scene.particles.dx!r}: about {count:.3g} "
+        f"particles (an estimate from the sources' volumes) at {per_particle} B each (the "
+        f"running state measured in {scene.dim}D) need {per_rank / GIB:.3g} GiB a rank on "
+        f"{size} rank(s){node}, more than the {av / GIB:.3g} GiB the node has available "
+        "(MemAvailable): take a larger dx, or more nodes")
