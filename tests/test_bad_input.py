@@ -163,7 +163,8 @@ def test_list_names_builtin_scenes():
     r = run_cli("list")
     assert r.returncode == 0
     names = [line.split()[0] for line in r.stdout.splitlines()]
-    assert names == ["collapse_3d", "collapse_dry", "collapse_saturated_psi-5",
+    assert names == ["collapse_3d", "collapse_dry", "collapse_saturated_3d",
+                     "collapse_saturated_psi-5",
                      "collapse_saturated_psi0",
                      "collapse_saturated_psi2.5", "cryer", "geostatic_column", "harmonic",
                      "retrogressive_k0_0.5", "retrogressive_k0_1.5", "slope_section",
