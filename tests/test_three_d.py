@@ -224,6 +224,15 @@ def test_cryer_sphere_mandel_cryer_peak(tmp_path):
     assert abs(e["peak_error"]) < 0.05 and abs(e["peak_time_error"]) < 0.10, e
 
 
+def test_cryer_run_ended_within_the_ramp_says_so(tmp_path):
+    """A `cryer` run stopped before its load's ramp ends has no peak to compare: its
+    summary says so instead of failing (it raised on an empty argmax)."""
+    scene = load_scene("cryer", ["particles.dx=0.1", "time.end=0.001", "loads.0.ramp=0.01",
+                                 "output.probes={centre=[0.05, 0.05, 0.05]}"])
+    s = run(scene, tmp_path / "out", quiet=True)
+    assert s["status"] == "finished" and "ramp" in s["errors"]["note"]
+
+
 def test_spheres_are_3d_only():
     r = run_cli("validate", "terzaghi", "--set",
                 "particles.spheres=[{centre=[0.0, 0.0], radius=0.1}]")

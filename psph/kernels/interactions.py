@@ -21,12 +21,26 @@ against its own ghosts by about 0.4 U/dx of spurious div v (tests/test_walls.py)
 Eq. (24)-(25) turn into run-away suction. A fixed wall resists shear, not stretching
 along itself; the paper's virtual wall particles [11] line the whole base and do not
 have this defect. On free-slip ghosts vs = v, so Gs = 0 without a fixed wall.
-The artificial viscosity (Monaghan, in C_ij of Eq. 26) also takes vs on ghost pairs: with
--v, the ghosts ahead of a particle sliding at U approached it at 2U, those behind receded,
+The artificial viscosity (Monaghan, in C_ij of Eq. 26) takes vs on ghost pairs, and in a
+dry scene acts between real particles only, not on pairs with a ghost or boundary
+particle (rows n_real..). With -v on a fixed wall's
+ghosts, those ahead of a particle sliding at U approached it at 2U, those behind receded,
 and the one-sided term pushed the bottom row backward and upward. That drag (7x the
 soil's strength) and lift (suction under a nearly undrained soil) were numerical
-(issue 13, cause 1: `python -m psph.app.sliding`). The wall's resistance to sliding
-is its shear stress, which the fixed-wall ghosts keep.
+(issue 13, cause 1: `python -m psph.app.sliding`), so the ghost pairs took vs. But even
+with vs a ghost pair keeps a wall-normal dashpot: a particle approaching the wall at
+v_n approaches its mirror at 2 v_n, and the viscosity pushes it back with a stress of
+about rho alpha c h v_n / y (y its distance from the wall) that is not the soil's. A soil
+that thins toward the wall as it flows (a layer stretched along the floor, isochoric at
+psi = 0) then rests on that dashpot instead of on its own sigma_nn: in a layer one row
+thick the viscosity carried 55 % of the row's weight after 0.2 s at 15 degrees, the
+row's sigma_yy relaxed from -470 to -15 Pa through the elastic div v of its stretching,
+its Drucker-Prager strength with it, and it slid at half of g sin(theta) (issue 37,
+`bench/diagnostics/thin_layer_friction.py`, `bench/diagnostics/thin_terms.py`). The wall's
+reactions are the ghosts' stresses: the normal one with the weight continued
+(`ghosts.py`), the shear one on a fixed wall, which resists sliding. A coupled scene
+keeps the ghost pairs' viscosity: without it the saturated sliding block of
+tests/test_basal_sliding.py reached -112 kPa of excess p at its base (-67 kPa with it).
 """
 
 import math
@@ -205,13 +219,14 @@ def make_pair_sums(dim: int):
                             t1 += syz * g2
                             t2 = szx * g0 + syz * g1 + szz * g2
                         rho_b = rho[b]
-                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26), on
-                        # the free-slip relative velocity: "Walls" in the module docstring
+                        # artificial viscosity (Monaghan), part of C_ij in Eq. (26),
+                        # between real particles only in a dry scene: "Walls" in the
+                        # module docstring
                         pi_ab = 0.0
                         vdotr = ds0 * dx0 + ds1 * dx1
                         if dim == 3:
                             vdotr += ds2 * dx2
-                        if vdotr < 0.0:
+                        if vdotr < 0.0 and (coupled or not ghost_pair):
                             mu = h * vdotr / (r2 + eps2)
                             pi_ab = (-av_alpha * c_sound * mu + av_beta * mu * mu) / (
                                 0.5 * (rho_a + rho_b))

@@ -173,6 +173,10 @@ def centre_errors(scene, t: np.ndarray, p: np.ndarray) -> dict:
     ref = from_scene(scene)
     ramp = scene.loads[0].ramp
     after = t > ramp
+    if not after.any():
+        return {"reference": "Cryer's series at the centre (psph.verify.cryer)",
+                "p0_Pa": ref.p0, "cv_m2_per_s": ref.cv,
+                "note": f"the run ended within the load's ramp ({ramp:g} s): no peak yet"}
     ts = t[after] - 0.5 * ramp
     pa = ref.centre_pressure(ts)
     k, ka = int(np.argmax(p[after])), int(np.argmax(pa))
