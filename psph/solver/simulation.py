@@ -135,7 +135,7 @@ class Simulation(Stages):
             w_cubic_dim(scene.particles.dx, self.h, dim)
         # F~ of Eq. (23)
         self.lattice_norm = 1.0 / lattice_moment(scene.particles.dx, self.h, dim)
-        self.scratch_moments = np.zeros((0, 18))  # the Shepard step's kernel moments
+        self.scratch_moments = np.zeros((0, self.kernels.moment_columns))  # Shepard step
         self.scratch_trace = np.zeros(0)  # tr(sigma') before the stress filter
         self.scratch_shift = np.zeros((0, 5))  # grad C, the shift and 1/2 of `_shift`
         self.load_value = np.zeros(max(len(scene.loads), 1))

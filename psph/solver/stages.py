@@ -21,7 +21,6 @@ from psph.kernels.bundles import (
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.neighbours import bin_particles, gather_sorted, grid_bounds
-from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.shifting import (
     FREE_TRACE,
     SHIFT_CAP,
@@ -135,7 +134,7 @@ class Stages:
         of a particle carries its filtered pressure (positions have not moved yet)."""
         st = self.store
         if self.scratch_moments.shape[0] < st.cap:
-            self.scratch_moments = np.zeros((st.cap, 18))
+            self.scratch_moments = np.zeros((st.cap, self.kernels.moment_columns))
             self.scratch_trace = np.zeros(st.cap)
         mom = self.scratch_moments
         stab = self.scene.stabilisation
@@ -143,16 +142,16 @@ class Stages:
         if stab.pressure_filter_porosity:
             p_before = self.scratch_trace[:st.n_owned]
             p_before[:] = st.p[:st.n_owned]
-        shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
-                         st.drained_from, self.drainage.layer_clock(self.t), self.cell_start,
-                         self.order, self.ncell,
-                         self.h, mom)
+        self.kernels.shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
+                                      st.drained_from, self.drainage.layer_clock(self.t),
+                                      self.cell_start, self.order, self.ncell, self.h, mom)
         if stab.pressure_filter_porosity:
             porosity_follows_pressure_filter(
                 st.n_owned, p_before, st.p, st.poro, st.poro0, st.vol, st.vol0, st.rho,
                 st.perm, s.rho_l, self.mat, st.material, s.K_l)
         if stab.shepard_stress:
-            stress_filter = mls_stress if stab.stress_filter == "mls" else shepard_stress
+            stress_filter = self.kernels.mls_stress if stab.stress_filter == "mls" \
+                else self.kernels.shepard_stress
             if stab.stress_filter_porosity:
                 trace = self.scratch_trace[:st.n_owned]
                 np.sum(st.stress[:st.n_owned, :3], axis=1, out=trace)
