@@ -21,17 +21,23 @@ COLUMN_3D = ["particles.dx=0.02", "domain.max=[0.08, 0.08, 1.0]",
              "time.end=0.03", "verification.tv=[]", "output.times=[0.005, 0.012]"]
 
 
+# the slopes' stabilisation in 3D: the Shepard step with the MLS stress filter, shifting
+STABILISED = ["stabilisation.shepard_every=7", "stabilisation.shepard_stress=true",
+              "stabilisation.stress_filter='mls'", "stabilisation.shifting=1.0"]
+
+
 @pytest.mark.mpi(min_size=2)
-@pytest.mark.parametrize("axis", ["z", "x"])
-def test_terzaghi_3d_one_vs_two_ranks_bitwise(tmp_path_factory, axis):
+@pytest.mark.parametrize("axis, extra", [("z", []), ("x", []), ("x", STABILISED)])
+def test_terzaghi_3d_one_vs_two_ranks_bitwise(tmp_path_factory, axis, extra):
     """Slabs along the column (z, the default: the longest side) and across it (x: every
     slab holds the whole height, the halo is a vertical plane with edge and corner
-    ghosts): every field the same bits, the same CG iteration counts."""
+    ghosts), and with the Shepard step, the MLS stress filter and particle shifting: every
+    field the same bits, the same CG iteration counts."""
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
-    scene = load_scene("terzaghi_3d", COLUMN_3D + [f"decomposition.axis='{axis}'"])
+    scene = load_scene("terzaghi_3d", COLUMN_3D + [f"decomposition.axis='{axis}'"] + extra)
     _one_vs_two(comm, scene, out)
     if comm.Get_rank() == 0:
         assert_same_cg_counts(out)

@@ -26,7 +26,6 @@ SMALL = ["particles.dx=0.02", "domain.max=[0.08, 0.08, 1.0]",
     (["--set", "particles.polygons=[{vertices=[[0, 0], [0.04, 0], [0.04, 0.5]]}]"],
      ["particles.polygons", "2D only"]),
     (["--set", "decomposition.axis='w'"], ["decomposition.axis"]),
-    (["--set", "stabilisation.shifting=1.0"], ["stabilisation.shifting", "2D only"]),
     (["--set", "material.plasticity={phi=30.0, c=1e3, regularisation={kind='nonlocal', "
       "length=0.05}}", "--set", "material.model='drucker_prager'"],
      ["material.plasticity.regularisation", "2D only"]),

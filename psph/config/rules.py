@@ -191,11 +191,9 @@ def check_dimension(scene) -> None:
                for key, m in named if m is not None
                and getattr(m, "plasticity", None) is not None
                and m.plasticity.regularisation is not None]
-    if scene.stabilisation.shifting > 0.0:
-        kernels.append(("stabilisation.shifting", scene.stabilisation.shifting))
     for key, value in kernels:
-        raise _Rule(key, value, "2D only so far (particle shifting and the non-local "
-                    "strain have no 3D kernels yet)")
+        raise _Rule(key, value, "2D only so far (the non-local strain has no 3D kernel "
+                    "yet)")
     for key, items in two_d:
         if items:
             raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "

@@ -26,15 +26,25 @@ the debris front of the slope off the floor, particle by particle, until one com
 to n = 0 at 6.2 s.) The particle's fields (stress, porosity, pressure, plastic strain,
 displacement) stay with it: the shift is a small fraction of dx per step, an error of the
 order of delta r . grad f.
+
+In 3D (`shift_particles_3d`) the same with the 3D layout of the sums (M: 9 columns, L: 9)
+and the thresholds of a 3D lattice: trace(M) 2.05 on the surface row, 2.90 on the second
+and 2.945 inside at h = 1.2 dx (2.03 / 2.875 / 2.98 at 1.3 dx), so `FREE_TRACE_3D` = 2.25
+(the ponding condition's surface in 3D) and `SURFACE_TRACE_3D` = 2.92; the surface's
+normal is the eigenvector of M's smallest eigenvalue.
 """
 
 import math
 
 import numba as nb
 
+from psph.kernels.sum_columns import sum_layout
+
 SHIFT_CAP = 0.05  # the longest shift of one step, in dx
 SURFACE_TRACE = 1.95  # trace(M) below which only the part along the surface is kept
 FREE_TRACE = 1.5  # trace(M) below which a particle is on the free surface: no shift
+SURFACE_TRACE_3D = 2.92  # the same two in 3D (module docstring)
+FREE_TRACE_3D = 2.25
 
 
 @nb.njit(cache=True)
@@ -85,3 +95,85 @@ def shift_particles(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, free
         x[i, 1] += d1
         shift[i, 0] = d0
         shift[i, 1] = d1
+
+
+@nb.njit(cache=True)
+def _surface_normal_3d(a00, a01, a02, a11, a12, a22):
+    """Unit eigenvector of the symmetric 3x3 matrix (a00 a01 a02; . a11 a12; . . a22) for
+    its smallest eigenvalue (the trigonometric solution of the characteristic cubic),
+    from the largest cross product of two rows of A - lambda I: the direction in which
+    the support is cut."""
+    q = (a00 + a11 + a22) / 3.0
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
+    if p2 <= 1e-30 * q * q:
+        return 0.0, 0.0, 0.0  # isotropic: no cut direction
+    pp = math.sqrt(p2 / 6.0)
+    b00, b11, b22 = (a00 - q) / pp, (a11 - q) / pp, (a22 - q) / pp
+    b01, b02, b12 = a01 / pp, a02 / pp, a12 / pp
+    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
+               + b02 * (b01 * b12 - b11 * b02))
+    r = min(1.0, max(-1.0, r))
+    lam = q + 2.0 * pp * math.cos(math.acos(r) / 3.0 + 2.0 * math.pi / 3.0)
+    r0 = (a00 - lam, a01, a02)
+    r1 = (a01, a11 - lam, a12)
+    r2 = (a02, a12, a22 - lam)
+    best = 0.0
+    n0 = n1 = n2 = 0.0
+    for u, v in ((r0, r1), (r0, r2), (r1, r2)):
+        c0 = u[1] * v[2] - u[2] * v[1]
+        c1 = u[2] * v[0] - u[0] * v[2]
+        c2 = u[0] * v[1] - u[1] * v[0]
+        size = c0 * c0 + c1 * c1 + c2 * c2
+        if size > best:
+            best, n0, n1, n2 = size, c0, c1, c2
+    if best == 0.0:
+        return 0.0, 0.0, 0.0
+    norm = math.sqrt(best)
+    return n0 / norm, n1 / norm, n2 / norm
+
+
+M_3D = sum_layout(3).M  # the 3D layout's first columns of M and of the velocity sums
+GV_3D = sum_layout(3).GV
+
+
+@nb.njit(cache=True)
+def shift_particles_3d(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, free_trace, x,
+                       shift):
+    """`shift_particles` in 3D: M_i and L_i from the 3D layout of `sums`
+    (`sum_columns.sum_layout(3)`), grad_c and shift (n, 3)."""
+    cm = M_3D
+    cgv = GV_3D
+    for i in range(n_owned):
+        m = sums[i]
+        trace = m[cm] + m[cm + 4] + m[cm + 8]
+        if trace < free_trace:
+            for k in range(3):
+                shift[i, k] = 0.0
+            continue
+        rate = 0.0
+        for k in range(9):
+            rate += m[cgv + k] * m[cgv + k]
+        d = coef * h * h * math.sqrt(rate) * dt
+        d0 = -d * grad_c[i, 0]
+        d1 = -d * grad_c[i, 1]
+        d2 = -d * grad_c[i, 2]
+        if trace < surface_trace:
+            n0, n1, n2 = _surface_normal_3d(
+                m[cm], 0.5 * (m[cm + 1] + m[cm + 3]), 0.5 * (m[cm + 2] + m[cm + 6]),
+                m[cm + 4], 0.5 * (m[cm + 5] + m[cm + 7]), m[cm + 8])
+            dn = d0 * n0 + d1 * n1 + d2 * n2
+            d0 -= dn * n0
+            d1 -= dn * n1
+            d2 -= dn * n2
+        length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        if length > cap:
+            d0 *= cap / length
+            d1 *= cap / length
+            d2 *= cap / length
+        x[i, 0] += d0
+        x[i, 1] += d1
+        x[i, 2] += d2
+        shift[i, 0] = d0
+        shift[i, 1] = d1
+        shift[i, 2] = d2

@@ -23,9 +23,12 @@ from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.neighbours import bin_particles, gather_sorted, grid_bounds
 from psph.kernels.shifting import (
     FREE_TRACE,
+    FREE_TRACE_3D,
     SHIFT_CAP,
     SURFACE_TRACE,
+    SURFACE_TRACE_3D,
     shift_particles,
+    shift_particles_3d,
 )
 from psph.kernels.update import (
     SCHEME_PROJECTION,
@@ -257,16 +260,19 @@ class Stages:
         pairs and volumes of this step's sweep; the update that follows moves x by dt v
         and puts back a particle found beyond a wall."""
         st = self.store
+        d = self.dim
         if self.scratch_shift.shape[0] < st.cap:
-            self.scratch_shift = np.zeros((st.cap, 5))
-            self.scratch_shift[:, 4] = 0.5  # grad C_i = sum_j V_j (1/2 + 1/2) grad_i W_ij
-        half = self.scratch_shift[:, 4]
-        grad_c = self.scratch_shift[:, 0:2]
+            self.scratch_shift = np.zeros((st.cap, 2 * d + 1))
+            self.scratch_shift[:, 2 * d] = 0.5  # grad C_i = sum_j V_j (1/2 + 1/2) grad_i W_ij
+        half = self.scratch_shift[:, 2 * d]
+        grad_c = self.scratch_shift[:, 0:d]
         symmetric_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.vol,
                                 half, grad_c)
-        shift_particles(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
-                        SHIFT_CAP * self.scene.particles.dx, SURFACE_TRACE, FREE_TRACE,
-                        st.x, self.scratch_shift[:, 2:4])
+        shift, surface, free = (shift_particles, SURFACE_TRACE, FREE_TRACE) if d == 2 else (
+            shift_particles_3d, SURFACE_TRACE_3D, FREE_TRACE_3D)
+        shift(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
+              SHIFT_CAP * self.scene.particles.dx, surface, free, st.x,
+              self.scratch_shift[:, d:2 * d])
 
     def mass_balance_residual(self) -> float:
         """`PressureSolve.residual` of this step (collective)."""
