@@ -188,3 +188,42 @@ def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_wit
         assert traction[dx] == pytest.approx(rows[-1]["strength_Pa"], rel=0.2)
     assert traction[0.4] == pytest.approx(traction[0.6], rel=0.1)
     assert traction[0.4] < 0.1 * 55e3  # softened toward c_r
+
+
+def test_3d_average_with_wall_images_equals_the_mirrored_lattice():
+    """In 3D (issue 37, `nonlocal_strain_3d`): with walls at x, y and z = -dx/2 (a corner
+    of three) the average of every particle equals the plain average over the lattice
+    extended by its images across each wall, each pair of walls and all three, with the
+    field mirrored (to 1e-12); a constant stays exact and a linear field is kept where
+    the support lies inside."""
+    import itertools
+
+    side = 9
+    g = np.arange(side) * DX
+    x = np.array(np.meshgrid(g, g, g, indexing="ij")).reshape(3, -1).T.copy()
+    n = len(x)
+    rng = np.random.default_rng(6)
+    eps = rng.uniform(0.0, 1.0, n)
+    walls = ((0, -0.5 * DX), (1, -0.5 * DX), (2, -0.5 * DX))
+    length = 0.13
+
+    def average(pos, field, owned=None, walls=()):
+        return nonlocal_strains(pos, np.full(len(pos), DX ** 3), field, [length], [[1.0]],
+                                n_owned=owned, walls=walls, h=H)[0]
+
+    out = average(x, eps, walls=walls)
+    images = []
+    for flip in itertools.product((False, True), repeat=3):
+        y = x.copy()
+        for ax in range(3):
+            if flip[ax]:
+                y[:, ax] = -DX - y[:, ax]
+        images.append(y)
+    ref = average(np.concatenate(images), np.tile(eps, 8), owned=n)
+    assert np.max(np.abs(out - ref[:n])) < 1e-12
+    assert np.max(np.abs(average(x, np.full(n, 0.037), walls=walls) - 0.037)) < 1e-12
+    lin = 0.05 + 0.02 * x[:, 0] + 0.03 * x[:, 1] - 0.01 * x[:, 2]
+    inner = np.all((x >= 2 * length - 1e-9) & (x <= x.max() - 2 * length + 1e-9), axis=1)
+    assert inner.sum() >= 8
+    got = average(x, lin)
+    assert np.max(np.abs(got[inner] - lin[inner])) < 1e-12

@@ -26,9 +26,6 @@ SMALL = ["particles.dx=0.02", "domain.max=[0.08, 0.08, 1.0]",
     (["--set", "particles.polygons=[{vertices=[[0, 0], [0.04, 0], [0.04, 0.5]]}]"],
      ["particles.polygons", "2D only"]),
     (["--set", "decomposition.axis='w'"], ["decomposition.axis"]),
-    (["--set", "material.plasticity={phi=30.0, c=1e3, regularisation={kind='nonlocal', "
-      "length=0.05}}", "--set", "material.model='drucker_prager'"],
-     ["material.plasticity.regularisation", "2D only"]),
 ])
 def test_a_vector_of_the_wrong_dimension_is_exit_2(override, words):
     r = run_cli("validate", "terzaghi_3d", *override)

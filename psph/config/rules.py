@@ -184,16 +184,6 @@ def check_dimension(scene) -> None:
              ("initial.water_table", [] if scene.initial.water_table is None
               or isinstance(scene.initial.water_table, float) else [1]),
              ("initial.undrained_load", [1] if scene.initial.undrained_load else [])]
-    # kernels written for 2D only: refused rather than run on 3D arrays
-    named = [("material", scene.material)] + [(f"materials[{i}]", m)
-                                              for i, m in enumerate(scene.materials)]
-    kernels = [(f"{key}.plasticity.regularisation", m.plasticity.regularisation.kind)
-               for key, m in named if m is not None
-               and getattr(m, "plasticity", None) is not None
-               and m.plasticity.regularisation is not None]
-    for key, value in kernels:
-        raise _Rule(key, value, "2D only so far (the non-local strain has no 3D kernel "
-                    "yet)")
     for key, items in two_d:
         if items:
             raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "

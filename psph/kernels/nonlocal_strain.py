@@ -25,114 +25,157 @@ m >= 1: m = 1 the plain non-local average; m > 1 weights the average above the l
 value, which keeps the band at a width set by l_c (Jirasek & Rolshoven 2003).
 eps_hat is clipped at 0 (no strength above the peak). The local eps_p still accumulates
 the return mapping's increments (`update.advance`).
+
+One source for 2D and 3D (`make_nonlocal_strain(dim)`, `dims.py`): in 3D the cells are
+searched layer by layer in z too, and the images are those across each wall, across two
+walls of different axes (an edge) and across three (a corner); the 2D kernel keeps the
+operations of the 2D code before 3D, so its bits.
 """
 
 import math
 
 import numba as nb
 
-from psph.kernels.spline import w_cubic
+from psph.kernels.spline import w_cubic_dim
 
 
-@nb.njit(cache=True)
-def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
-                    cell_start, order, ncell, rings, plastic_cell, wall_axis, wall_pos, out):
-    """out[i] = eps_hat_i of particles 0..n_owned-1 (module docstring).
+def make_nonlocal_strain(dim: int):
+    """`nonlocal_strain` in `dim` = 2 or 3 dimensions."""
 
-    wall_axis, wall_pos: the walls x[axis] = pos whose images enter the sums (empty: none).
-    An image of j lies no closer to i than j itself (both on the soil's side), so the
-    cells that hold the real particles within 2 l_c hold every image's source too.
+    @nb.njit(cache=True, inline="always")
+    def image_weight(x, i, j, axes, pos, count, vol_j, lc):
+        """V_j W(|x_i - image of x_j|, l_c) for the image of j across the `count` walls
+        x[axes[k]] = pos[k] (distinct axes); 0 beyond the support."""
+        d0 = x[j, 0] - x[i, 0]
+        d1 = x[j, 1] - x[i, 1]
+        d2 = x[j, 2] - x[i, 2] if dim == 3 else 0.0
+        for k in range(count):
+            if axes[k] == 0:
+                d0 = 2.0 * pos[k] - x[j, 0] - x[i, 0]
+            elif axes[k] == 1:
+                d1 = 2.0 * pos[k] - x[j, 1] - x[i, 1]
+            else:
+                d2 = 2.0 * pos[k] - x[j, 2] - x[i, 2]
+        r2 = d0 * d0 + d1 * d1
+        if dim == 3:
+            r2 += d2 * d2
+        if r2 >= 4.0 * lc * lc:
+            return 0.0
+        return vol_j * w_cubic_dim(math.sqrt(r2), lc, dim)
 
-    lengths[k], weights[k]: l_c (m) and m of material k (l_c = 0: local, out = eps_p);
-    cell_of, cell_start, order, ncell: the step's cell lists (cells of side 2h, particles
-    in key order in a cell); rings: cells to search on each side, >= 2 max l_c / (2h);
-    plastic_cell: scratch of at least ncell[0] * ncell[1] entries.
-    Each sum visits the cells row by row in the global numbering and a cell in key
-    order: the same particles in the same order on any number of ranks (bitwise 1 vs N,
-    with a halo of at least 2 l_c). A particle with no plastic strain in the cells it
-    searches keeps eps_hat = eps_p = 0 without the sum (which would give exactly that):
-    the sums run only where something has yielded within the support."""
-    ncx = ncell[0]
-    ncy = ncell[1]
-    nw = len(wall_axis)
-    for c in range(ncx * ncy):
-        plastic_cell[c] = 0
-    for j in range(n_real):
-        if eps_p[j] != 0.0:
-            plastic_cell[cell_of[j]] = 1
-    for i in range(n_owned):
-        k = int(material[i])
-        lc = lengths[k]
-        if not lc > 0.0:
-            out[i] = eps_p[i]
-            continue
-        c = cell_of[i]
-        cx = c % ncx
-        cy = c // ncx
-        near = False
-        for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
-            for nx in range(max(cx - rings, 0), min(cx + rings + 1, ncx)):
-                if plastic_cell[ny * ncx + nx]:
-                    near = True
-        if not near:
-            out[i] = eps_p[i]
-            continue
-        support2 = 4.0 * lc * lc
-        near_walls = 0  # bit a: i within 2 l_c of wall a, whose images can reach it
-        for a in range(nw):
-            if abs(x[i, wall_axis[a]] - wall_pos[a]) < 2.0 * lc:
-                near_walls |= 1 << a
-        num = 0.0
-        den = 0.0
-        for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
-            for nx in range(max(cx - rings, 0), min(cx + rings + 1, ncx)):
-                nc = ny * ncx + nx
-                for s in range(cell_start[nc], cell_start[nc + 1]):
-                    j = order[s]
-                    if j >= n_real or int(material[j]) != k:
-                        continue
-                    d0 = x[j, 0] - x[i, 0]
-                    d1 = x[j, 1] - x[i, 1]
-                    r2 = d0 * d0 + d1 * d1
-                    if r2 >= support2:
-                        continue
-                    w = vol[j] * w_cubic(math.sqrt(r2), lc)
-                    num += w * eps_p[j]
-                    den += w
-                    for a in range(nw):
-                        if not (near_walls >> a) & 1:
-                            continue
-                        ax = wall_axis[a]
-                        g = _image_weight(x, i, j, ax, wall_pos[a], -1, 0.0, vol[j], lc)
-                        num += g * eps_p[j]
-                        den += g
-                        for b in range(a + 1, nw):  # the corner image across both
-                            bx = wall_axis[b]
-                            if bx == ax or not (near_walls >> b) & 1:
+    @nb.njit(cache=True)
+    def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
+                        cell_start, order, ncell, rings, plastic_cell, wall_axis, wall_pos,
+                        out):
+        """out[i] = eps_hat_i of particles 0..n_owned-1 (module docstring).
+
+        wall_axis, wall_pos: the walls x[axis] = pos whose images enter the sums (empty:
+        none). An image of j lies no closer to i than j itself (both on the soil's side),
+        so the cells that hold the real particles within 2 l_c hold every image's source
+        too.
+
+        lengths[k], weights[k]: l_c (m) and m of material k (l_c = 0: local, out = eps_p);
+        cell_of, cell_start, order, ncell: the step's cell lists (cells of side 2h,
+        particles in key order in a cell); rings: cells to search on each side, >= 2 max
+        l_c / (2h); plastic_cell: scratch of at least prod(ncell) entries.
+        Each sum visits the cells row by row in the global numbering and a cell in key
+        order: the same particles in the same order on any number of ranks (bitwise 1 vs
+        N, with a halo of at least 2 l_c). A particle with no plastic strain in the cells
+        it searches keeps eps_hat = eps_p = 0 without the sum (which would give exactly
+        that): the sums run only where something has yielded within the support."""
+        ncx = ncell[0]
+        ncy = ncell[1]
+        ncz = ncell[2] if dim == 3 else 1
+        nw = len(wall_axis)
+        axes = wall_axis.copy()[:3]  # the walls of one image (at most one a axis)
+        pos = wall_pos.copy()[:3]
+        for c in range(ncx * ncy * ncz):
+            plastic_cell[c] = 0
+        for j in range(n_real):
+            if eps_p[j] != 0.0:
+                plastic_cell[cell_of[j]] = 1
+        for i in range(n_owned):
+            k = int(material[i])
+            lc = lengths[k]
+            if not lc > 0.0:
+                out[i] = eps_p[i]
+                continue
+            c = cell_of[i]
+            cx = c % ncx
+            cy = (c // ncx) % ncy
+            cz = c // (ncx * ncy) if dim == 3 else 0
+            z0 = max(cz - rings, 0) if dim == 3 else 0
+            z1 = min(cz + rings + 1, ncz) if dim == 3 else 1
+            near = False
+            for nz in range(z0, z1):
+                for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
+                    for nx in range(max(cx - rings, 0), min(cx + rings + 1, ncx)):
+                        if plastic_cell[(nz * ncy + ny) * ncx + nx]:
+                            near = True
+            if not near:
+                out[i] = eps_p[i]
+                continue
+            support2 = 4.0 * lc * lc
+            near_walls = 0  # bit a: i within 2 l_c of wall a, whose images can reach it
+            for a in range(nw):
+                if abs(x[i, wall_axis[a]] - wall_pos[a]) < 2.0 * lc:
+                    near_walls |= 1 << a
+            num = 0.0
+            den = 0.0
+            for nz in range(z0, z1):
+                for ny in range(max(cy - rings, 0), min(cy + rings + 1, ncy)):
+                    for nx in range(max(cx - rings, 0), min(cx + rings + 1, ncx)):
+                        nc = (nz * ncy + ny) * ncx + nx
+                        for s in range(cell_start[nc], cell_start[nc + 1]):
+                            j = order[s]
+                            if j >= n_real or int(material[j]) != k:
                                 continue
-                            g = _image_weight(x, i, j, ax, wall_pos[a], bx, wall_pos[b],
-                                              vol[j], lc)
-                            num += g * eps_p[j]
-                            den += g
-        m = weights[k]
-        e = (1.0 - m) * eps_p[i] + m * (num / den)
-        out[i] = e if e > 0.0 else 0.0
+                            d0 = x[j, 0] - x[i, 0]
+                            d1 = x[j, 1] - x[i, 1]
+                            r2 = d0 * d0 + d1 * d1
+                            if dim == 3:
+                                d2 = x[j, 2] - x[i, 2]
+                                r2 += d2 * d2
+                            if r2 >= support2:
+                                continue
+                            w = vol[j] * w_cubic_dim(math.sqrt(r2), lc, dim)
+                            num += w * eps_p[j]
+                            den += w
+                            for a in range(nw):
+                                if not (near_walls >> a) & 1:
+                                    continue
+                                axes[0], pos[0] = wall_axis[a], wall_pos[a]
+                                g = image_weight(x, i, j, axes, pos, 1, vol[j], lc)
+                                num += g * eps_p[j]
+                                den += g
+                                for b in range(a + 1, nw):  # an edge image across both
+                                    if wall_axis[b] == wall_axis[a] \
+                                            or not (near_walls >> b) & 1:
+                                        continue
+                                    axes[1], pos[1] = wall_axis[b], wall_pos[b]
+                                    g = image_weight(x, i, j, axes, pos, 2, vol[j], lc)
+                                    num += g * eps_p[j]
+                                    den += g
+                                    if dim == 2:
+                                        continue
+                                    for e in range(b + 1, nw):  # a corner: three walls
+                                        if wall_axis[e] == wall_axis[a] \
+                                                or wall_axis[e] == wall_axis[b] \
+                                                or not (near_walls >> e) & 1:
+                                            continue
+                                        axes[2], pos[2] = wall_axis[e], wall_pos[e]
+                                        g = image_weight(x, i, j, axes, pos, 3, vol[j], lc)
+                                        num += g * eps_p[j]
+                                        den += g
+            m = weights[k]
+            e = (1.0 - m) * eps_p[i] + m * (num / den)
+            out[i] = e if e > 0.0 else 0.0
+
+    return nonlocal_strain
 
 
-@nb.njit(cache=True, inline="always")
-def _image_weight(x, i, j, ax, pos, bx, pos_b, vol_j, lc):
-    """V_j W(|x_i - image of x_j|, l_c) for the image of j across the wall x[ax] = pos, and
-    also across x[bx] = pos_b when bx >= 0 (a corner); 0 beyond the support."""
-    d0 = x[j, 0] - x[i, 0]
-    d1 = x[j, 1] - x[i, 1]
-    if ax == 0 or bx == 0:
-        d0 = 2.0 * (pos if ax == 0 else pos_b) - x[j, 0] - x[i, 0]
-    if ax == 1 or bx == 1:
-        d1 = 2.0 * (pos if ax == 1 else pos_b) - x[j, 1] - x[i, 1]
-    r2 = d0 * d0 + d1 * d1
-    if r2 >= 4.0 * lc * lc:
-        return 0.0
-    return vol_j * w_cubic(math.sqrt(r2), lc)
+nonlocal_strain = make_nonlocal_strain(2)
+nonlocal_strain_3d = make_nonlocal_strain(3)
 
 
 def rings_for(length: float, cell_size: float) -> int:

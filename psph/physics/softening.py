@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
+from psph.kernels.nonlocal_strain import nonlocal_strain, nonlocal_strain_3d, rings_for
 
 
 def _regularisations(scene) -> list:
@@ -50,13 +50,13 @@ class NonlocalSoftening:
         st = store
         if self.eps_hat.shape[0] < st.cap:
             self.eps_hat = np.zeros(st.cap)
-        cells = int(ncell[0] * ncell[1])
+        cells = int(np.prod(ncell))
         if self.plastic_cell.shape[0] < cells:
             self.plastic_cell = np.zeros(2 * cells, np.int8)
-        nonlocal_strain(st.n_owned, st.n_real, st.x, st.vol, st.eps_p, st.material,
-                        self.lengths, self.weights, cell_of, cell_start, order, ncell,
-                        self.rings, self.plastic_cell, self.wall_axis, self.wall_pos,
-                        self.eps_hat)
+        average = nonlocal_strain if len(ncell) == 2 else nonlocal_strain_3d
+        average(st.n_owned, st.n_real, st.x, st.vol, st.eps_p, st.material, self.lengths,
+                self.weights, cell_of, cell_start, order, ncell, self.rings,
+                self.plastic_cell, self.wall_axis, self.wall_pos, self.eps_hat)
 
 
 def nonlocal_softening(scene, cell_size: float, wall_axis: np.ndarray,

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from psph.kernels.neighbours import cell_lists_indexed
-from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
+from psph.kernels.nonlocal_strain import nonlocal_strain, nonlocal_strain_3d, rings_for
 
 
 def nonlocal_strains(x: np.ndarray, vol: np.ndarray, eps_p: np.ndarray,
@@ -22,7 +22,8 @@ def nonlocal_strains(x: np.ndarray, vol: np.ndarray, eps_p: np.ndarray,
     """eps_hat of rows 0..n_owned-1 (default: every row; the rest NaN) for each weight
     set (m per material), all rows real. lengths[k]: l_c of material k (0: local);
     walls: (axis, position) planes whose images enter; h: half the cell side (default
-    l_c / 4: any size works, the kernel searches the rings that cover 2 l_c)."""
+    l_c / 4: any size works, the kernel searches the rings that cover 2 l_c). x: (N, 2)
+    or (N, 3)."""
     n = len(x)
     x = np.ascontiguousarray(x, float)
     material = np.zeros(n) if material is None else np.ascontiguousarray(material, float)
@@ -37,13 +38,14 @@ def nonlocal_strains(x: np.ndarray, vol: np.ndarray, eps_p: np.ndarray,
     h = 0.25 * float(lengths.max()) if h is None else h
     cell_of, cell_start, order, ncell = cell_lists_indexed(x, h)
     rings = rings_for(float(lengths.max()), 2 * h)
-    scratch = np.zeros(int(ncell[0] * ncell[1]), np.int8)
+    scratch = np.zeros(int(np.prod(ncell)), np.int8)
+    average = nonlocal_strain if x.shape[1] == 2 else nonlocal_strain_3d
     axis = np.array([a for a, _ in walls], np.int64)
     pos = np.array([p for _, p in walls], float)
     out = []
     for weights in weight_sets:
         hat = np.full(n, np.nan)
-        nonlocal_strain(owned, n, x, np.ascontiguousarray(vol, float),
+        average(owned, n, x, np.ascontiguousarray(vol, float),
                         np.ascontiguousarray(eps_p, float), material, lengths,
                         np.asarray(weights, float), cell_of, cell_start, order, ncell, rings,
                         scratch, axis, pos, hat)
