@@ -70,12 +70,13 @@ def mirror_moment(sums, n, c):
 
 
 @nb.njit(cache=True, inline="always")
-def velocity_differences(v, v_slip, a, b, ghost_pair, dim):
-    """(dv0, dv1, dv2, ds0, ds1, ds2): v_b - v_a, and the free-slip v_slip_b - v_slip_a on a
-    pair with a wall ghost (else dv); the third components 0 in 2D."""
-    dv0 = v[b, 0] - v[a, 0]
-    dv1 = v[b, 1] - v[a, 1]
-    dv2 = v[b, 2] - v[a, 2] if dim == 3 else 0.0
+def velocity_differences(v, v_slip, a, b, va0, va1, va2, ghost_pair, dim):
+    """(dv0, dv1, dv2, ds0, ds1, ds2): v_b - v_a (v_a = (va0, va1, va2), loaded by the
+    caller, which may hold it for all of a's pairs), and the free-slip v_slip_b - v_slip_a
+    on a pair with a wall ghost (else dv); the third components 0 in 2D."""
+    dv0 = v[b, 0] - va0
+    dv1 = v[b, 1] - va1
+    dv2 = v[b, 2] - va2 if dim == 3 else 0.0
     ds0 = dv0
     ds1 = dv1
     ds2 = dv2

@@ -48,7 +48,7 @@ import math
 import numba as nb
 
 from psph.kernels.dims import add_moment, add_outer, mirror_moment, pick, velocity_differences
-from psph.kernels.neighbours import forward_slots, half_stencil_rows
+from psph.kernels.neighbours import forward_slots, half_stencil_rows, next_cell
 from psph.kernels.spline import dw_cubic_dim, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
 
@@ -114,13 +114,7 @@ def make_pair_sums(dim: int):
         eps2 = 0.01 * h * h
         cx, cy, cz = -1, 0, 0
         for c in range(ncx * ncy * ncz):  # row-major, x fastest: the global cell order
-            cx += 1
-            if cx == ncx:
-                cx = 0
-                cy += 1
-                if cy == ncy:
-                    cy = 0
-                    cz += 1
+            cx, cy, cz = next_cell(cx, cy, cz, ncx, ncy)
             for sa in range(cell_start[c], cell_start[c + 1]):
                 a = order[sa]
                 own_a = a < n_owned
@@ -183,16 +177,8 @@ def make_pair_sums(dim: int):
                             n_pairs += 1
                         vb = vol[b]
                         ghost_pair = ghost_a or b >= n_real
-                        dv0 = v[b, 0] - va0
-                        dv1 = v[b, 1] - va1
-                        dv2 = v[b, 2] - va2 if dim == 3 else 0.0
-                        ds0 = dv0
-                        ds1 = dv1
-                        ds2 = dv2
-                        if ghost_pair:
-                            ds0 = v_slip[b, 0] - v_slip[a, 0]
-                            ds1 = v_slip[b, 1] - v_slip[a, 1]
-                            ds2 = v_slip[b, 2] - v_slip[a, 2] if dim == 3 else 0.0
+                        dv0, dv1, dv2, ds0, ds1, ds2 = velocity_differences(
+                            v, v_slip, a, b, va0, va1, va2, ghost_pair, dim)
                         # total stress sum sigma_a + sigma_b (Eq. 2: sigma = sigma' - p I)
                         p_b = p[b]
                         pab = p_weight * (p_a + p_b)
@@ -340,8 +326,9 @@ def make_velocity_gradient_sums(dim: int):
             g1 = pair_g[k, 1]
             g2 = pair_g[k, 2] if dim == 3 else 0.0
             ghost_pair = a >= n_real or b >= n_real
-            dv0, dv1, dv2, ds0, ds1, ds2 = velocity_differences(v, v_slip, a, b, ghost_pair,
-                                                                 dim)
+            dv0, dv1, dv2, ds0, ds1, ds2 = velocity_differences(
+                v, v_slip, a, b, v[a, 0], v[a, 1], v[a, 2] if dim == 3 else 0.0, ghost_pair,
+                dim)
             for side in range(2):  # a's sums with V_b, then b's with V_a
                 i = a if side == 0 else b
                 j = b if side == 0 else a

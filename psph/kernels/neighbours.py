@@ -48,6 +48,20 @@ def half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start):
 
 
 @nb.njit(cache=True, inline="always")
+def next_cell(cx, cy, cz, ncx, ncy):
+    """The cell after (cx, cy, cz) in the global row-major order, x fastest (a sweep over
+    cells c = 0, 1, ... starts from (-1, 0, 0))."""
+    cx += 1
+    if cx == ncx:
+        cx = 0
+        cy += 1
+        if cy == ncy:
+            cy = 0
+            cz += 1
+    return cx, cy, cz
+
+
+@nb.njit(cache=True, inline="always")
 def half_stencil_rows(dim: int) -> int:
     """Slot ranges r of `forward_slots` to visit: 2 in 2D, 5 in 3D."""
     return 2 if dim == 2 else 5

@@ -15,7 +15,7 @@ import math
 
 import numba as nb
 
-from psph.kernels.neighbours import forward_slots, half_stencil_rows
+from psph.kernels.neighbours import forward_slots, half_stencil_rows, next_cell
 from psph.kernels.spline import w_cubic_dim
 
 
@@ -91,13 +91,7 @@ def make_kernel_moments(dim: int):
         support2 = 4.0 * h * h
         cx, cy, cz = -1, 0, 0
         for c0 in range(ncx * ncy * ncz):  # row-major, x fastest: the global cell order
-            cx += 1
-            if cx == ncx:
-                cx = 0
-                cy += 1
-                if cy == ncy:
-                    cy = 0
-                    cz += 1
+            cx, cy, cz = next_cell(cx, cy, cz, ncx, ncy)
             for sa in range(cell_start[c0], cell_start[c0 + 1]):
                 a = order[sa]
                 for row in range(n_rows):
