@@ -229,7 +229,7 @@ def test_a_scene_too_large_for_memory_is_exit_2_before_anything_is_allocated(tmp
     r = subprocess.run([sys.executable, "-c", code, "run", str(f), "--out", str(out)],
                        capture_output=True, text=True, timeout=120)
     assert_bad_input(r, ["particles.dx = 0.0002", "about 8.11e+10 particles", "estimate",
-                         "4200 B each", "GiB a rank on 1 rank(s)", "GiB the node has "
+                         "1700 B each", "dry", "GiB a rank on 1 rank(s)", "GiB the node has "
                          "available (MemAvailable)"], out)
     assert int(r.stdout.split()[-1]) * 1024 < 1024 ** 3  # ru_maxrss in KiB
 
@@ -240,7 +240,7 @@ def test_memory_check_shares_the_particles_among_the_ranks_of_a_node():
     from psph.app.memory import STATE_BYTES_PER_PARTICLE, check_memory
 
     scene = load_scene("terzaghi_3d")  # 1,600 particles
-    need = 1600 * STATE_BYTES_PER_PARTICLE[3]
+    need = 1600 * STATE_BYTES_PER_PARTICLE[3, True]
     check_memory(scene, MPI.COMM_SELF, available=need * 1.01)
     with pytest.raises(SceneError, match=r"particles.dx = 0.01: about 1.6e\+03 particles"):
         check_memory(scene, MPI.COMM_SELF, available=need * 0.99)

@@ -5,13 +5,16 @@ count would not fit is bad input, exit 2, one line, nothing written)."""
 from psph.errors import SceneError
 from psph.geometry.lattice import estimate_count
 
-# Bytes of the running state per owned particle (`Simulation.state_bytes`: the particle
-# store, scratch, neighbour and pair lists), measured by `make bench` on 2026-12-05 for
-# the coupled elastic TPI step (docs/performance.md, "3D rows"): 2,083 and 2,072 B in 2D,
-# 4,215 and 4,190 B in 3D. A dry scene takes less (1,725 B for the 3D collapse) and the
-# peak resident memory more (the interpreter, numba and MPI, about 190 MB a rank; the
-# snapshot and checkpoint writes), so the check refuses only what clearly cannot run.
-STATE_BYTES_PER_PARTICLE = {2: 2_100, 3: 4_200}
+# Bytes a particle at least, by (dim, coupled): the running state per owned particle
+# (`Simulation.state_bytes`: the particle store, scratch, neighbour and pair lists)
+# measured by `make bench` on 2026-12-05 (docs/performance.md, "3D rows"): the coupled
+# elastic TPI step 2,104-2,115 B in 2D and 4,238-4,263 B in 3D, the dry 3D collapse
+# 1,773 B; a dry 2D scene's whole peak 695 B (the 9.9M-particle collapse at 6.39 GiB on
+# one rank, "Ten million particles"). Rounded down: the peak resident memory is above
+# the state (the interpreter, numba and MPI, about 190 MB a rank; the snapshot and
+# checkpoint writes), so the check refuses only what clearly cannot run.
+STATE_BYTES_PER_PARTICLE = {(2, True): 2_100, (2, False): 650, (3, True): 4_200,
+                            (3, False): 1_700}
 
 GIB = 1024.0 ** 3
 
@@ -51,7 +54,8 @@ def check_memory(scene, comm, available: float | None = None) -> None:
     count = estimate_count(scene)
     size = comm.Get_size()
     local = node_ranks(comm)
-    per_particle = STATE_BYTES_PER_PARTICLE[scene.dim]
+    coupled = scene.pressure.scheme != "none"
+    per_particle = STATE_BYTES_PER_PARTICLE[scene.dim, coupled]
     per_rank = count * per_particle / size
     avail = available_bytes() if available is None else available
     nodes = comm.allgather((local, avail))
@@ -63,6 +67,7 @@ def check_memory(scene, comm, available: float | None = None) -> None:
     raise SceneError(
         f"scene '{scene.name}': particles.dx = {scene.particles.dx!r}: about {count:.3g} "
         f"particles (an estimate from the sources' volumes) at {per_particle} B each (the "
-        f"running state measured in {scene.dim}D) need {per_rank / GIB:.3g} GiB a rank on "
-        f"{size} rank(s){node}, more than the {av / GIB:.3g} GiB the node has available "
-        "(MemAvailable): take a larger dx, or more nodes")
+        f"running state measured in {scene.dim}D, {'coupled' if coupled else 'dry'}) need "
+        f"{per_rank / GIB:.3g} GiB a rank on {size} rank(s){node}, more than the "
+        f"{av / GIB:.3g} GiB the node has available (MemAvailable): take a larger dx, or "
+        "more nodes")
