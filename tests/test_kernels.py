@@ -101,3 +101,44 @@ def test_pair_loop_matches_brute_force():
             ref[i, 2:4] += vol[j] * sig @ g / rho[i]
     assert np.allclose(s[:, M_XX:M_XY + 1], ref[:, 0:2], rtol=1e-12, atol=1e-12)
     assert np.allclose(s[:, DVDT], ref[:, 2:4], rtol=1e-10, atol=1e-10)
+
+
+def test_wall_ghost_pairs_carry_no_artificial_viscosity_in_a_dry_scene():
+    """Issue 37, thin layers: a particle approaching a wall at v_n approaches its mirror
+    ghost at 2 v_n, and the Monaghan viscosity of that pair was a wall-normal dashpot
+    that carried a one-row layer's weight (docs/vv/collapse_3d.md, cause 1). In a dry
+    sweep (coupled False) a ghost pair has none; between real particles, and on ghost
+    pairs of a coupled sweep, it stays."""
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
+    from psph.kernels.interactions import pair_sums
+    from psph.kernels.neighbours import cell_lists
+    from psph.kernels.sum_columns import DVDT, NSUMS
+
+    dx, h = 0.1, 0.12
+    # a real particle falling toward the floor y = 0, its mirror ghost (row 2), and a
+    # second real particle above approaching it
+    x = np.array([[0.0, 0.5 * dx], [0.0, 1.5 * dx], [0.0, -0.5 * dx]])
+    v = np.array([[0.0, -1.0], [0.0, -3.0], [0.0, 1.0]])
+    n = len(x)
+    z = np.zeros
+    fields = PairFields(x, v, v.copy(), z((n, 4)), z(n), z(n), np.full(n, 0.4),
+                        np.full(n, dx * dx), np.full(n, 2000.0), np.ones(n), z((n, 2)),
+                        z((n, 3)))
+    cells = sorted_cells(*cell_lists(x, h), x)
+    rec = PairRecord(z((0, 2), np.int64), z((0, 2)))
+
+    def acc(coupled, av_alpha):
+        sums = z((n, NSUMS))
+        par = PairParams(h, av_alpha=av_alpha, c_sound=20.0, coupled=coupled).typed()
+        pair_sums(n, 2, 2, fields, cells, par, sums, rec)
+        return sums[:2, DVDT.start + 1]
+
+    plain = acc(False, 0.0)
+    dry, wet = acc(False, 1.0), acc(True, 1.0)
+    real_pair = acc(False, 1.0) - plain  # particle 0's viscosity with particle 1 only...
+    assert abs(real_pair[1]) > 0.0  # ...and particle 1's with 0: real pairs keep it
+    # particle 0 feels particle 1's viscosity in both; the ghost's only in the coupled one
+    ghost_dry = dry[0] - plain[0] - (dry[1] - plain[1]) * (-1.0)
+    ghost_wet = wet[0] - plain[0] - (dry[1] - plain[1]) * (-1.0)
+    assert abs(ghost_dry) < 1e-12 * abs(real_pair[1])
+    assert ghost_wet > 0.1 * abs(real_pair[1])  # the coupled sweep's dashpot pushes it up

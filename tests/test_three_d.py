@@ -36,6 +36,16 @@ def test_a_vector_of_the_wrong_dimension_is_exit_2(override, words):
         assert w in line, line
 
 
+def test_a_slab_collapse_must_fill_its_slab():
+    """A 3D collapse read as plane strain must fill the domain between its front and back
+    walls: a block narrower than that spreads in y and is not a plane-strain state."""
+    r = run_cli("validate", "collapse_saturated_3d", "--set",
+                "particles.blocks=[{min=[0.0, 0.04, 0.0], max=[4.0, 0.12, 2.0]}]")
+    assert r.returncode == 2 and "\n" not in r.stderr.strip()
+    for w in ("particles.blocks[0]", "plane-strain slab", "y from 0 to 0.16"):
+        assert w in r.stderr, r.stderr
+
+
 def test_a_2d_scene_refuses_3d_keys():
     for override, word in ((["--set", "boundaries.front={motion='slip'}"], "boundaries.front"),
                            (["--set", "gravity=[0.0, 0.0, -9.81]"], "gravity"),

@@ -132,6 +132,14 @@ def check_collapse_3d(scene) -> None:
         raise _Rule("verification.reference", "collapse", "in 3D needs exactly one "
                     "[[particles.cylinders]] (the axisymmetric collapse) or blocks between "
                     "slip walls at the front and the back (a plane-strain slab)")
+    y0, y1 = scene.domain.min[1], scene.domain.max[1]
+    for i, blk in enumerate(p.blocks):
+        if abs(blk.min[1] - y0) > 1e-9 * max(1.0, abs(y1 - y0)) \
+                or abs(blk.max[1] - y1) > 1e-9 * max(1.0, abs(y1 - y0)):
+            raise _Rule(f"particles.blocks[{i}]", f"y from {blk.min[1]:g} to {blk.max[1]:g}",
+                        f"a plane-strain slab fills the domain between its front and back "
+                        f"walls, y from {y0:g} to {y1:g} (verification.reference = "
+                        "'collapse' in 3D)")
 
 
 def check_dimension(scene) -> None:

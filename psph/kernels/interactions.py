@@ -57,7 +57,10 @@ def fastmath_of(dim: int):
     """LLVM's fast-math flags of the 3D sweep: a division by a pair's r or rho may become a
     product with its reciprocal ("arcp") and a product and a sum one fused multiply-add
     ("contract"): 1.2x on the 3D sweep, the same bits on any partition (each pair's
-    arithmetic is the same code on every rank). None in 2D, which keeps its bits."""
+    arithmetic is the same code on every rank). The fused operations are the CPU's and
+    LLVM's choice, so 3D bits are those of one machine type and one numba version: a
+    restart on another kind of node continues the run, not its bits. None in 2D, which
+    keeps its bits on any machine."""
     return {"arcp", "contract"} if dim == 3 else False
 
 

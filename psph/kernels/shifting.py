@@ -30,8 +30,10 @@ order of delta r . grad f.
 In 3D (`shift_particles_3d`) the same with the 3D layout of the sums (M: 9 columns, L: 9)
 and the thresholds of a 3D lattice: trace(M) 2.05 on the surface row, 2.90 on the second
 and 2.945 inside at h = 1.2 dx (2.03 / 2.875 / 2.98 at 1.3 dx), so `FREE_TRACE_3D` = 2.25
-(the ponding condition's surface in 3D) and `SURFACE_TRACE_3D` = 2.92; the surface's
-normal is the eigenvector of M's smallest eigenvalue.
+(the ponding condition's surface in 3D) and `SURFACE_TRACE_3D` = 2.92. Under a face M has
+one small eigenvalue, whose eigenvector is the face's normal, and the shift loses its part
+along it; under an edge two, and the shift keeps only its part along the edge (the
+largest eigenvalue's eigenvector); at a corner none is kept.
 """
 
 import math
@@ -45,6 +47,10 @@ SURFACE_TRACE = 1.95  # trace(M) below which only the part along the surface is 
 FREE_TRACE = 1.5  # trace(M) below which a particle is on the free surface: no shift
 SURFACE_TRACE_3D = 2.92  # the same two in 3D (module docstring)
 FREE_TRACE_3D = 2.25
+# M's two smallest eigenvalues closer than this share of its trace: an edge (module
+# docstring). A lattice's row under a face has a gap of 0.040 / 2.90 = 1.4 %; under an
+# edge 0 (0.939, 0.939, 0.978 at h = 1.2 dx); jitter moves them by less than the half
+EDGE_GAP_3D = 0.007
 
 
 @nb.njit(cache=True)
@@ -97,33 +103,22 @@ def shift_particles(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, free
         shift[i, 1] = d1
 
 
-@nb.njit(cache=True)
-def _surface_normal_3d(a00, a01, a02, a11, a12, a22):
-    """Unit eigenvector of the symmetric 3x3 matrix (a00 a01 a02; . a11 a12; . . a22) for
-    its smallest eigenvalue (the trigonometric solution of the characteristic cubic),
-    from the largest cross product of two rows of A - lambda I: the direction in which
-    the support is cut."""
-    q = (a00 + a11 + a22) / 3.0
-    p1 = a01 * a01 + a02 * a02 + a12 * a12
-    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
-    if p2 <= 1e-30 * q * q:
-        return 0.0, 0.0, 0.0  # isotropic: no cut direction
-    pp = math.sqrt(p2 / 6.0)
-    b00, b11, b22 = (a00 - q) / pp, (a11 - q) / pp, (a22 - q) / pp
-    b01, b02, b12 = a01 / pp, a02 / pp, a12 / pp
-    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
-               + b02 * (b01 * b12 - b11 * b02))
-    r = min(1.0, max(-1.0, r))
-    lam = q + 2.0 * pp * math.cos(math.acos(r) / 3.0 + 2.0 * math.pi / 3.0)
-    r0 = (a00 - lam, a01, a02)
-    r1 = (a01, a11 - lam, a12)
-    r2 = (a02, a12, a22 - lam)
+@nb.njit(cache=True, inline="always")
+def _eigenvector_3d(a00, a01, a02, a11, a12, a22, lam):
+    """Unit eigenvector of the symmetric 3x3 matrix A for its (simple) eigenvalue lam: the
+    largest cross product of two rows of A - lam I; (0, 0, 0) if there is none."""
     best = 0.0
     n0 = n1 = n2 = 0.0
-    for u, v in ((r0, r1), (r0, r2), (r1, r2)):
-        c0 = u[1] * v[2] - u[2] * v[1]
-        c1 = u[2] * v[0] - u[0] * v[2]
-        c2 = u[0] * v[1] - u[1] * v[0]
+    for k in range(3):  # the row pairs (0, 1), (0, 2), (1, 2)
+        if k == 0:
+            u0, u1, u2, v0, v1, v2 = a00 - lam, a01, a02, a01, a11 - lam, a12
+        elif k == 1:
+            u0, u1, u2, v0, v1, v2 = a00 - lam, a01, a02, a02, a12, a22 - lam
+        else:
+            u0, u1, u2, v0, v1, v2 = a01, a11 - lam, a12, a02, a12, a22 - lam
+        c0 = u1 * v2 - u2 * v1
+        c1 = u2 * v0 - u0 * v2
+        c2 = u0 * v1 - u1 * v0
         size = c0 * c0 + c1 * c1 + c2 * c2
         if size > best:
             best, n0, n1, n2 = size, c0, c1, c2
@@ -131,6 +126,56 @@ def _surface_normal_3d(a00, a01, a02, a11, a12, a22):
         return 0.0, 0.0, 0.0
     norm = math.sqrt(best)
     return n0 / norm, n1 / norm, n2 / norm
+
+
+@nb.njit(cache=True)
+def _eigenvalues_3d(a00, a01, a02, a11, a12, a22):
+    """The eigenvalues l1 <= l2 <= l3 of the symmetric 3x3 matrix A (the trigonometric
+    solution of the characteristic cubic)."""
+    q = (a00 + a11 + a22) / 3.0
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
+    if p2 <= 1e-30 * q * q:
+        return q, q, q
+    pp = math.sqrt(p2 / 6.0)
+    b00, b11, b22 = (a00 - q) / pp, (a11 - q) / pp, (a22 - q) / pp
+    b01, b02, b12 = a01 / pp, a02 / pp, a12 / pp
+    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
+               + b02 * (b01 * b12 - b11 * b02))
+    r = min(1.0, max(-1.0, r))
+    phi = math.acos(r) / 3.0
+    l3 = q + 2.0 * pp * math.cos(phi)
+    l1 = q + 2.0 * pp * math.cos(phi + 2.0 * math.pi / 3.0)
+    return l1, 3.0 * q - l1 - l3, l3
+
+
+@nb.njit(cache=True)
+def _surface_normal_3d(a00, a01, a02, a11, a12, a22):
+    """Unit eigenvector of the symmetric 3x3 matrix A for its smallest eigenvalue: the
+    direction in which the support is cut; (0, 0, 0) where A is isotropic."""
+    l1, _, l3 = _eigenvalues_3d(a00, a01, a02, a11, a12, a22)
+    if l3 - l1 <= 1e-15 * abs(l3):
+        return 0.0, 0.0, 0.0
+    return _eigenvector_3d(a00, a01, a02, a11, a12, a22, l1)
+
+
+@nb.njit(cache=True)
+def _along_surface_3d(d0, d1, d2, a00, a01, a02, a11, a12, a22, edge_gap):
+    """The part of the shift (d0, d1, d2) along the surface whose cut directions M
+    (upper triangle a..) shows: on a face (one small eigenvalue) the shift less its part
+    along that eigenvector; along an edge (the two smallest within `edge_gap` of each
+    other: cut along both faces' normals) only its part along the largest eigenvector,
+    the edge; at a corner or where M is isotropic, nothing."""
+    l1, l2, l3 = _eigenvalues_3d(a00, a01, a02, a11, a12, a22)
+    if l3 - l1 <= edge_gap:
+        return 0.0, 0.0, 0.0
+    if l2 - l1 > edge_gap:  # a face
+        n0, n1, n2 = _eigenvector_3d(a00, a01, a02, a11, a12, a22, l1)
+        dn = d0 * n0 + d1 * n1 + d2 * n2
+        return d0 - dn * n0, d1 - dn * n1, d2 - dn * n2
+    e0, e1, e2 = _eigenvector_3d(a00, a01, a02, a11, a12, a22, l3)  # an edge
+    de = d0 * e0 + d1 * e1 + d2 * e2
+    return de * e0, de * e1, de * e2
 
 
 M_3D = sum_layout(3).M  # the 3D layout's first columns of M and of the velocity sums
@@ -159,13 +204,10 @@ def shift_particles_3d(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, f
         d1 = -d * grad_c[i, 1]
         d2 = -d * grad_c[i, 2]
         if trace < surface_trace:
-            n0, n1, n2 = _surface_normal_3d(
-                m[cm], 0.5 * (m[cm + 1] + m[cm + 3]), 0.5 * (m[cm + 2] + m[cm + 6]),
-                m[cm + 4], 0.5 * (m[cm + 5] + m[cm + 7]), m[cm + 8])
-            dn = d0 * n0 + d1 * n1 + d2 * n2
-            d0 -= dn * n0
-            d1 -= dn * n1
-            d2 -= dn * n2
+            d0, d1, d2 = _along_surface_3d(
+                d0, d1, d2, m[cm], 0.5 * (m[cm + 1] + m[cm + 3]),
+                0.5 * (m[cm + 2] + m[cm + 6]), m[cm + 4], 0.5 * (m[cm + 5] + m[cm + 7]),
+                m[cm + 8], EDGE_GAP_3D * trace)
         length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if length > cap:
             d0 *= cap / length
