@@ -16,7 +16,7 @@ sys.path.insert(0, "bench/diagnostics")
 from thin_layer_friction import DX, SCENE  # noqa: E402
 
 from psph.app.run import make_slabs  # noqa: E402
-from psph.config.load import resolve, validate  # noqa: E402
+from psph.config.load import apply_override, resolve, validate  # noqa: E402
 from psph.kernels.sum_columns import (  # noqa: E402
     GS_XX,
     GS_XY,
@@ -42,13 +42,8 @@ g = 9.81
 text = SCENE.format(gx=g * math.sin(math.radians(theta)), gz=-g * math.cos(math.radians(theta)),
                     dx=DX, h=rows * DX, c=100.0, end=0.5)
 raw = tomllib.loads(text)
-for s in sets:
-    k, v = s.split("=", 1)
-    d = raw
-    ks = k.split(".")
-    for kk in ks[:-1]:
-        d = d.setdefault(kk, {})
-    d[ks[-1]] = tomllib.loads(f"x = {v}")["x"]
+for assignment in sets:
+    apply_override(raw, assignment)  # as `psph run --set`
 scene = resolve(validate(raw))
 sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))
 st = sim.store

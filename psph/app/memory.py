@@ -9,10 +9,11 @@ from psph.geometry.lattice import estimate_count
 # (`Simulation.state_bytes`: the particle store, scratch, neighbour and pair lists)
 # measured by `make bench` on 2026-12-05 (docs/performance.md, "3D rows", with the
 # sorted positions of the pair sweep): the coupled elastic TPI step 2,104-2,115 B in 2D
-# and 4,238-4,263 B in 3D, the dry 3D collapse 1,773 B; a dry 2D scene's whole peak 695 B (the 9.9M-particle collapse at 6.39 GiB on
-# one rank, "Ten million particles"). Rounded down: the peak resident memory is above
-# the state (the interpreter, numba and MPI, about 190 MB a rank; the snapshot and
-# checkpoint writes), so the check refuses only what clearly cannot run.
+# and 4,238-4,263 B in 3D, the dry 3D collapse 1,773 B; a dry 2D scene's whole peak
+# 695 B (the 9.9M-particle collapse at 6.39 GiB on one rank, "Ten million particles").
+# Rounded down: the peak resident memory is above the state (the interpreter, numba and
+# MPI, about 190 MB a rank; the snapshot and checkpoint writes), so the check refuses
+# only what clearly cannot run.
 STATE_BYTES_PER_PARTICLE = {(2, True): 2_100, (2, False): 650, (3, True): 4_200,
                             (3, False): 1_700}
 
