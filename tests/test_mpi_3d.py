@@ -133,3 +133,23 @@ def test_collapse_3d_with_nonlocal_strain_one_vs_two_ranks_bitwise(tmp_path_fact
     if comm.Get_rank() == 0:
         last = read_snapshots(out / "one" / "particles.h5")[-1]
         assert last["eps_p"].max() > 0.0  # the averages ran where the soil yielded
+
+
+@pytest.mark.mpi(min_size=2)
+def test_collapse_3d_on_a_surface_floor_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """The dry quarter column (CI size) on a floor given as a surface lined with boundary
+    particles (`kernels/boundary_3d.py`, halo 4h): 1 and 2 ranks, every field the same
+    bits."""
+    from mpi4py import MPI
+
+    from tests.test_surfaces import FLOOR_SURFACE
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    scene = load_scene("collapse_3d", [
+        "particles.dx=0.1", "time.end=0.15", "output.interval=0.05",
+        "boundaries.bottom={motion='free'}", FLOOR_SURFACE.replace("2.0", "5.0")])
+    _one_vs_two(comm, scene, out, ())
+    if comm.Get_rank() == 0:
+        last = read_snapshots(out / "one" / "particles.h5")[-1]
+        assert last["x"][:, 2].min() > 0.0 and np.abs(last["v"]).max() > 0.1

@@ -22,6 +22,7 @@ import os
 import platform
 import subprocess
 import sys
+import tomllib
 from datetime import date
 from pathlib import Path
 
@@ -50,6 +51,14 @@ def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> 
     if r.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
     return json.loads(summary.read_text())
+
+
+def plasticity_settings(psi: str) -> list[str]:
+    """The 2D scene's whole [material.plasticity] as --set lines for the slab: the angles
+    differ in c and s_f as well as in psi (Table 1)."""
+    path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
+    plasticity = tomllib.loads(path.read_text())["material"]["plasticity"]
+    return [f"material.plasticity.{k}={v}" for k, v in plasticity.items()]
 
 
 def numbers(s: dict) -> dict:
@@ -95,7 +104,7 @@ def main() -> None:
     for psi in args.psi:
         s2 = run(RUNS / f"psi{psi}_2d", f"collapse_saturated_psi{psi}", 1, [], args.reuse)
         s3 = run(RUNS / f"psi{psi}_3d", "collapse_saturated_3d", args.np,
-                 [f"material.plasticity.psi={float(psi)}"], args.reuse)
+                 plasticity_settings(psi), args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
         rows[psi] = {"2d": r2, "3d": r3,
                      "runout_rel": r3["runout_m"] / r2["runout_m"] - 1.0,

@@ -1,6 +1,6 @@
-"""Scene models of the boundaries: the four sides of the domain box (mirror ghosts,
-`kernels/ghosts.py`) and rigid polylines lined with boundary particles (issue 16,
-`psph/solver/boundary.py`).
+"""Scene models of the boundaries: the sides of the domain box (mirror ghosts,
+`kernels/ghosts.py`), rigid polylines (2D, issue 16) and rigid surfaces (3D, issue 37)
+lined with boundary particles (`psph/solver/boundary.py`).
 
 A polyline is given by its points [[x, z], ...] (inline or a CSV file, as the ground
 profiles of `geometry/profiles.py`) and the side the soil is on: "above" or "below" for a
@@ -69,6 +69,67 @@ class Polyline(_Model):
         "\"lattice\" (on the soil's lattice)")
 
 
+class Surface(_Model):
+    """A rigid surface in 3D, fixed in space (`[[boundaries.surfaces]]`), lined with
+    boundary particles on the soil's lattice (`geometry/surfaces.py`): a mesh file meshio
+    reads (STL, OBJ, PLY, VTK, ...; its triangles and quads), or vertices and triangles
+    inline. soil: "above" / "below" a surface z(x, y), or "outside" / "inside" a closed
+    one. motion, friction_angle and drained as on a polyline."""
+
+    mesh: str | None = Field(None, description="Path of a surface mesh file meshio reads "
+                             "(triangles, quads); or give vertices and triangles")
+    vertices: list[list[float]] | None = Field(
+        None, description="Inline vertices [[x, y, z], ...] [m]")
+    triangles: list[list[int]] | None = Field(
+        None, description="Inline triangles [[i, j, k], ...], indices into vertices")
+    soil: Literal["above", "below", "outside", "inside"] = Field(
+        description="Side the soil is on: \"above\"/\"below\" (a surface z(x, y)) or "
+        "\"outside\"/\"inside\" (a closed surface)")
+    motion: Literal["fixed", "slip", "friction"] = Field(
+        "fixed", description="\"fixed\" (no slip), \"slip\" (frictionless) or "
+        "\"friction\" (Coulomb)")
+    friction_angle: float | None = Field(
+        None, description="Wall friction angle φ_b, 0 ≤ φ_b < 90; required with and only "
+        "with motion = \"friction\" [deg]")
+    drained: bool = Field(False, description="true holds p = 0 on the surface; false is "
+                          "impermeable")
+
+
+def triangles_of(surface: Surface, key: str = "surface") -> tuple[np.ndarray, np.ndarray]:
+    """(points (k, 3), triangles (m, 3)) of a surface, from its mesh file or inline.
+    Raises SceneRule / SceneError (one line naming `key`)."""
+    from psph.errors import SceneError
+    from psph.geometry.shapes import mesh_triangles
+
+    if (surface.mesh is None) == (surface.vertices is None and surface.triangles is None):
+        raise SceneRule(key, "mesh" if surface.mesh else "none",
+                        "give either mesh (a file) or vertices and triangles")
+    if surface.mesh is not None:
+        from pathlib import Path
+
+        if not Path(surface.mesh).is_file():
+            raise SceneRule(f"{key}.mesh", surface.mesh, "no such file")
+        points, tri = mesh_triangles(surface.mesh, f"{key}.mesh = {surface.mesh!r}")
+        if not len(tri) or points.shape[1] != 3:
+            raise SceneError(f"{key}.mesh = {surface.mesh!r}: no triangle or quad faces "
+                             "in 3D")
+        return points, tri
+    if surface.vertices is None or surface.triangles is None:
+        raise SceneRule(key, "vertices" if surface.triangles is None else "triangles",
+                        "inline needs both vertices and triangles")
+    points = np.asarray(surface.vertices, float)
+    tri = np.asarray(surface.triangles, np.int64)
+    if points.ndim != 2 or points.shape[1] != 3 or not len(points):
+        raise SceneRule(f"{key}.vertices", surface.vertices, "needs [[x, y, z], ...]")
+    if tri.ndim != 2 or tri.shape[1] != 3 or not len(tri):
+        raise SceneRule(f"{key}.triangles", surface.triangles, "needs [[i, j, k], ...]")
+    if tri.min() < 0 or tri.max() >= len(points):
+        raise SceneRule(f"{key}.triangles", int(tri.max() if tri.max() >= len(points)
+                                                else tri.min()),
+                        f"vertex indices run from 0 to {len(points) - 1}")
+    return points, tri
+
+
 def points_of(line: Polyline, key: str = "polyline"):
     """(k, 2) points of a polyline: a profile in x ("above"/"below") or in z
     ("left"/"right"), strictly increasing in that coordinate. Raises SceneRule."""
@@ -95,6 +156,8 @@ class Boundaries(_Model):
     back: Boundary = Field(Boundary(), description="3D only: the side y = domain.max[1]")
     polylines: list[Polyline] = Field([], description="Rigid polylines lined with boundary "
                                       "particles (issue 16)")
+    surfaces: list[Surface] = Field([], description="3D only: rigid surfaces lined with "
+                                    "boundary particles (issue 37)")
 
     @model_validator(mode="after")
     def _symmetry(self) -> "Boundaries":
@@ -111,9 +174,11 @@ class Boundaries(_Model):
 
     @model_validator(mode="after")
     def _polylines(self) -> "Boundaries":
-        for i, line in enumerate(self.polylines):
-            key = f"boundaries.polylines[{i}]"
-            points_of(line, key)
+        walls = [(f"boundaries.polylines[{i}]", line) for i, line in enumerate(self.polylines)]
+        walls += [(f"boundaries.surfaces[{i}]", sf) for i, sf in enumerate(self.surfaces)]
+        for key, line in walls:
+            if isinstance(line, Polyline):
+                points_of(line, key)
             phi = line.friction_angle
             if line.motion == "friction":
                 if phi is None:

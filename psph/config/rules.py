@@ -6,11 +6,13 @@ exit 2."""
 import math
 from pathlib import Path
 
+from psph.config.boundaries import triangles_of
 from psph.config.materials import check_materials
 from psph.errors import SceneRule as _Rule
 from psph.geometry.box import side_planes
 from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
 from psph.geometry.solids import read_surface
+from psph.geometry.surfaces import soil_normals
 from psph.physics.limits import (
     TPI_ALPHA_MAX,
     solid_dt_limit,
@@ -55,6 +57,10 @@ def check_scene(scene):
             raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")
         if dim == 3:  # a closed surface, read once here so that bad input stops early
             read_surface(mesh.file, f"particles.meshes[{im}].file")
+    for i, surface in enumerate(scene.boundaries.surfaces):  # read and oriented once here
+        key = f"boundaries.surfaces[{i}]"
+        points, tri = triangles_of(surface, key)
+        soil_normals(points, tri, surface.soil, key)
     for ib, b in enumerate(scene.particles.blocks):
         for d in range(dim):
             if b.max[d] <= b.min[d]:
@@ -88,8 +94,9 @@ def check_scene(scene):
             if not lo[d] <= pt[d] <= hi[d]:
                 raise _Rule(f"output.probes.{name}", pt,
                             f"probe outside the domain [{lo}, {hi}]")
-    if scene.pressure.scheme == "projection" and scene.boundaries.polylines:
-        raise _Rule("pressure.scheme", "projection", "not yet with boundaries.polylines")
+    for kind in ("polylines", "surfaces"):
+        if scene.pressure.scheme == "projection" and getattr(scene.boundaries, kind):
+            raise _Rule("pressure.scheme", "projection", f"not yet with boundaries.{kind}")
     if scene.pressure.recycle == 1:
         raise _Rule("pressure.recycle", 1, "0 (off) or at least 2 basis vectors")
     if scene.pressure.momentum != "pair" and scene.pressure.scheme not in ("explicit", "tpi"):
@@ -176,6 +183,9 @@ def check_dimension(scene) -> None:
         if dim == 2 and getattr(scene.particles, kind):
             raise _Rule(f"particles.{kind}", f"{len(getattr(scene.particles, kind))} given",
                         "3D only (a 2D scene takes polygons)")
+    if dim == 2 and b.surfaces:
+        raise _Rule("boundaries.surfaces", f"{len(b.surfaces)} given", "3D only (a 2D scene "
+                    "takes boundaries.polylines)")
     if dim == 2 and scene.decomposition.axis == "z":
         raise _Rule("decomposition.axis", "z", "3D only (a 2D scene cuts slabs along x or y)")
     if dim == 2:
@@ -195,8 +205,8 @@ def check_dimension(scene) -> None:
     for key, items in two_d:
         if items:
             raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "
-                        "particles.blocks, particles.meshes (closed surfaces), box sides, a "
-                        "level water table)")
+                        "particles.blocks, particles.meshes (closed surfaces), box sides, "
+                        "boundaries.surfaces, a level water table)")
 
 
 def check_cryer(scene) -> None:

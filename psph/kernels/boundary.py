@@ -236,12 +236,12 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
 
 
 @nb.njit(cache=True)
-def place_rows(first, n_b, src, bx, bkey, dx2, x, key, vol):
-    """Positions, sort keys and volumes (dx^2) of the selected boundary particles src at
-    rows first.. of the store."""
+def place_rows(first, n_b, src, bx, bkey, cell_volume, x, key, vol):
+    """Positions, sort keys and volumes (dx^dim) of the selected boundary particles src
+    at rows first.. of the store (2D or 3D by bx)."""
     for r in range(n_b):
         k = src[r]
-        x[first + r, 0] = bx[k, 0]
-        x[first + r, 1] = bx[k, 1]
+        for d in range(bx.shape[1]):
+            x[first + r, d] = bx[k, d]
         key[first + r] = bkey[k]
-        vol[first + r] = dx2
+        vol[first + r] = cell_volume

@@ -1,15 +1,18 @@
-"""Rigid polyline boundaries lined with boundary particles (issue 16; the paper's virtual
-particles, ref. [11]): set-up, the rows each rank holds, their state each step, contact.
+"""Rigid boundaries lined with boundary particles (the paper's virtual particles, ref.
+[11]): polylines in 2D (issue 16), surfaces in 3D (issue 37); set-up, the rows each rank
+holds, their state each step, contact.
 
 The boundary particles of all polylines are built once on every rank: rows (k + 1/2) dx
 from the line (`geometry/polylines.boundary_particles`), or with `rows = "lattice"` on the
 domain's particle lattice (`lattice_particles`: the first boundary row dx from the soil's
-lowest row in every column, as the mirror ghosts of a plane wall). Their number scales
-with the perimeter, not the soil. They never
+lowest row in every column, as the mirror ghosts of a plane wall). Those of a surface
+are the soil lattice's points within 2h behind it (`geometry/surfaces.py`). Their number
+scales with the perimeter (the area in 3D), not the soil. They never
 move or migrate: each step a rank appends those within its slab plus 4h after the wall
 ghosts (rows n_real + n_wall_ghosts ..; the selection is recomputed only when the slab
 moves), then, after the neighbour search, sets their state from the soil around them
-(`kernels/boundary.py`: Adami et al. 2012 with the plane ghosts' conventions).
+(`kernels/boundary.py`, `kernels/boundary_3d.py`: Adami et al. 2012 with the plane
+ghosts' conventions).
 
 Partition independence: a boundary particle within 2h of an owned particle averages soil
 up to 4h from the slab, so scenes with polylines use a halo (and a minimum slab width) of
@@ -21,9 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from psph.config.boundaries import points_of
+from psph.config.boundaries import points_of, triangles_of
 from psph.config.schema import Scene
 from psph.geometry.polylines import boundary_particles, lattice_particles
+from psph.geometry.surfaces import surface_particles
 from psph.kernels.boundary import (
     MOTION_FIXED,
     MOTION_FRICTION,
@@ -32,34 +36,50 @@ from psph.kernels.boundary import (
     boundary_state,
     place_rows,
 )
+from psph.kernels.boundary_3d import boundary_contact_3d, boundary_state_3d
 from psph.physics.softening import reach
 
 _MOTION = {"fixed": MOTION_FIXED, "slip": MOTION_SLIP, "friction": MOTION_FRICTION}
 
 
+def has_boundary_particles(scene: Scene) -> bool:
+    """Whether the scene has polylines or surfaces lined with boundary particles."""
+    return bool(scene.boundaries.polylines or scene.boundaries.surfaces)
+
+
 def halo_width(scene: Scene) -> float:
-    """Halo depth and minimum inner slab width: 2h, or 4h with polyline boundaries (their
+    """Halo depth and minimum inner slab width: 2h, or 4h with boundary particles (their
     Shepard averages reach 2h beyond the 2h of the pair loop), or the support 2 l_c of a
     regularised softening if wider (psph/physics/softening.py)."""
-    return max((4.0 if scene.boundaries.polylines else 2.0) * scene.h, reach(scene))
+    return max((4.0 if has_boundary_particles(scene) else 2.0) * scene.h, reach(scene))
 
 
-class PolylineBoundaries:
-    """The boundary particles of `scene.boundaries.polylines` and their rows on this rank."""
+class BoundaryParticles:
+    """The boundary particles of `scene.boundaries.polylines` (2D) or `.surfaces` (3D)
+    and their rows on this rank."""
 
     def __init__(self, scene: Scene, key_base: float):
         """key_base: the first sort key of the boundary particles (above every soil and
         ghost key), the same on every rank."""
         dx, h = scene.particles.dx, scene.h
+        self.dim = scene.dim
         lo = np.array(scene.domain.min, float) - 2.0 * h
         hi = np.array(scene.domain.max, float) + 2.0 * h
         xs, ns, fs, motion, tan_phi, drained = [], [], [], [], [], []
-        for i, line in enumerate(scene.boundaries.polylines):
-            pts = points_of(line, f"boundaries.polylines[{i}]")
-            if line.rows == "lattice":  # the domain's lattice: dx from the soil's lowest row
+        walls = [(f"boundaries.polylines[{i}]", w)
+                 for i, w in enumerate(scene.boundaries.polylines)]
+        walls += [(f"boundaries.surfaces[{i}]", w)
+                  for i, w in enumerate(scene.boundaries.surfaces)]
+        for key, line in walls:
+            if key.startswith("boundaries.surfaces"):
+                pts, tri = triangles_of(line, key)
+                x, n, f = surface_particles(pts, tri, line.soil, dx, h, scene.domain.min, lo,
+                                            hi, key)
+            elif line.rows == "lattice":  # the domain's lattice: dx from the soil's lowest
+                pts = points_of(line, key)
                 x, n, f = lattice_particles(pts, line.soil, dx, h, scene.domain.min, lo, hi)
             else:
-                x, n, f = boundary_particles(pts, line.soil, dx, h)
+                x, n, f = boundary_particles(points_of(line, key), line.soil, dx, h)
             inside = np.all((x >= lo) & (x <= hi), axis=1)  # beyond: no soil can reach
             xs.append(x[inside])
             ns.append(n[inside])
@@ -76,7 +96,7 @@ class PolylineBoundaries:
         self.tan_phi = np.concatenate(tan_phi)
         self.drained = np.concatenate(drained)
         self.key = key_base + np.arange(len(self.x), dtype=float)
-        self.dx2 = dx * dx
+        self.cell_volume = dx ** self.dim
         self.h = h
         self.width = halo_width(scene)
         self.src = np.zeros(0, np.int64)
@@ -100,15 +120,21 @@ class PolylineBoundaries:
             return False
         self.first = store.n_total
         self.n = nb
-        place_rows(self.first, nb, self.src, self.x, self.key, self.dx2, store.x, store.key,
-                   store.vol)
+        place_rows(self.first, nb, self.src, self.x, self.key, self.cell_volume, store.x,
+                   store.key, store.vol)
         store.n_ghost += nb
         return True
 
-    def state(self, store, v_slip, head_b, cell_of, cell_start, order, ncell) -> None:
+    def state(self, store, v_slip, head_b, body, cell_of, cell_start, order, ncell) -> None:
         """Velocity, pressure, effective stress, porosity, density, conductivity and
         acceleration of the boundary rows (and v_slip = v on the real rows)."""
         st = store
+        if self.dim == 3:
+            boundary_state_3d(st.n_real, self.first, self.n, self.src, self.motion,
+                              self.tan_phi, self.drained, self.normal, st.x, st.v, v_slip,
+                              st.stress, st.p, st.p_prev, st.poro, st.rho, st.perm, st.acc,
+                              head_b, body, cell_of, cell_start, order, ncell, self.h)
+            return
         boundary_state(st.n_real, self.first, self.n, self.src, self.motion, self.tan_phi,
                        self.drained, self.normal, st.x, st.v, v_slip, st.stress, st.p,
                        st.p_prev, st.poro, st.rho, st.perm, st.acc, head_b, cell_of,
@@ -117,6 +143,7 @@ class PolylineBoundaries:
     def contact(self, store, origin, cell_size, grid_lo, ncell, cell_start, order) -> int:
         """Put back owned particles found beyond a polyline (`boundary_contact`)."""
         st = store
-        return boundary_contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
+        contact = boundary_contact_3d if self.dim == 3 else boundary_contact
+        return contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
                                 self.normal, self.foot, origin, cell_size, grid_lo, ncell,
                                 cell_start, order, self.h)

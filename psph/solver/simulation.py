@@ -36,7 +36,7 @@ from psph.physics.material import (
     stiffest,
 )
 from psph.physics.softening import nonlocal_softening
-from psph.solver.boundary import PolylineBoundaries, halo_width
+from psph.solver.boundary import BoundaryParticles, halo_width, has_boundary_particles
 from psph.solver.drainage import Drainage
 from psph.solver.kernel_set import kernels_for
 from psph.solver.pressure_solve import PressureSolve
@@ -94,11 +94,13 @@ class Simulation(Stages):
         self.wall_sign, self.wall_fixed = walls.sign, walls.fixed
         # ghost velocities as on a free-slip wall, for the stretching rates (interactions.py);
         # without a fixed wall they are the velocities themselves
-        nw = len(walls.sides)  # polyline boundary particles: sort keys above every ghost's
-        self.polylines = PolylineBoundaries(scene, float(self.n_ids) * (1 + nw + nw * nw)) \
-            if scene.boundaries.polylines else None
+        nw = len(walls.sides)  # boundary particles: sort keys above every ghost's (corners
+        # in 3D; the 2D keys as they were)
+        stride = 1 + nw + nw * nw + (nw ** 3 if dim == 3 else 0)
+        self.wall_particles = BoundaryParticles(scene, float(self.n_ids) * stride) \
+            if has_boundary_particles(scene) else None
         self.halo = halo_width(scene)
-        self._v_slip = np.zeros((0, dim)) if self.wall_fixed.any() or self.polylines else None
+        self._v_slip = np.zeros((0, dim)) if self.wall_fixed.any() or self.wall_particles else None
         self.ghost_src = np.zeros(0, np.int64)
         self.ghost_sign = np.ones(0)  # +1, or -1 for the ghosts of a drained wall
         # the initial lattice's extent, also on a restart (x - u of a checkpoint is not
@@ -192,10 +194,10 @@ class Simulation(Stages):
             stages.append(Stage("reset_halo", self._reset_halo))
         if len(self.wall_axis):
             stages.append(Stage("ghosts", self._ghosts))
-        if self.polylines:
+        if self.wall_particles:
             stages.append(Stage("boundary_rows", self._boundary_rows))
         stages.append(Stage("neighbours", self._neighbours))
-        if self.polylines:
+        if self.wall_particles:
             stages.append(Stage("boundary_state", self._boundary_state))
         if self.coupled and self.drainage.has_planes:
             stages.append(Stage("drained_planes", self._drained_planes))

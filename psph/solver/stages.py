@@ -93,22 +93,22 @@ class Stages:
             st.ensure(2 * st.cap)
 
     def _boundary_rows(self) -> None:
-        """Rows of the polyline boundary particles near this slab, after the ghosts."""
-        self.polylines.select(*self.slabs.slab)
-        while not self.polylines.append(self.store):
+        """Rows of the boundary particles near this slab, after the ghosts."""
+        self.wall_particles.select(*self.slabs.slab)
+        while not self.wall_particles.append(self.store):
             if len(self.wall_axis):  # the store grew: ghosts again (v_slip was reset)
                 self._ghosts()
 
     def _boundary_state(self) -> None:
-        self.polylines.state(self.store, self.v_slip, self.head_b, self.cell_of,
-                             self.cell_start, self.order, self.ncell)
+        self.wall_particles.state(self.store, self.v_slip, self.head_b, self.body_force,
+                                  self.cell_of, self.cell_start, self.order, self.ncell)
 
     def _refresh_walls(self) -> None:
         """Wall ghosts and boundary particles again from the current real rows."""
         n_ghost = self.store.n_ghost  # the wall ghosts' count is unchanged
         if len(self.wall_axis):
             self._ghosts()
-        if self.polylines:
+        if self.wall_particles:
             self.store.n_ghost = n_ghost
             self._boundary_state()
 
@@ -164,7 +164,7 @@ class Stages:
                 porosity_follows_stress_filter(
                     st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
                     st.perm, s.rho_l, self.mat, st.material)
-        last = "boundary_state" if self.polylines else "neighbours"
+        last = "boundary_state" if self.wall_particles else "neighbours"
         for stage in self.stages[:self.stages.index(self._stage(last)) + 1]:
             if not stage.name.startswith("rebalance"):
                 stage.run()
@@ -251,8 +251,8 @@ class Stages:
         if len(self.wall_axis):
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
-        if self.polylines:
-            self.polylines.contact(st, self.origin, self.cell_size, self.grid_lo, self.ncell,
+        if self.wall_particles:
+            self.wall_particles.contact(st, self.origin, self.cell_size, self.grid_lo, self.ncell,
                                    self.cell_start, self.order)
 
     def _shift(self) -> None:

@@ -1,0 +1,246 @@
+"""Boundary particles of rigid surfaces in 3D (issue 37): their state each step and the
+no-penetration safety net, the 3D form of `boundary.py` (polylines in 2D).
+
+As in 2D (Adami, Hu & Adams 2012, with the plane ghosts' conventions), a boundary
+particle b with unit normal n (into the soil) takes the Shepard averages f~_b of the soil
+particles j (rows < n_real) within 2h: velocity and acceleration (fixed: reversed; slip:
+the normal component reversed), pore pressure (impermeable: the total head of Eq. (25)
+continued into the wall, p_j + rho_l b.(x_b - x_j); drained: -p~), effective stress,
+porosity, density and conductivity. Two things are 3D-specific:
+
+- the wall's shear is a vector, the tangential part tau = sigma'~ n - sigma'~_nn n of the
+  traction: kept on a fixed wall, reversed on a slip wall (sigma'_b = sigma'~ - 2 (tau n^T
+  + n tau^T)), and on a friction wall, where |tau| exceeds tau_max = tan(phi_b)
+  max(-sigma'_nn, 0), set to tau_b = 2 tau_max tau / |tau| - tau, so that the pair stress
+  of Eq. (26), (tau + tau_b) / 2, carries the Coulomb limit along tau;
+- the wall-normal total stress is continued with the weight of the soil between j and b,
+  min(-rho_j b.(x_b - x_j), 0), and the pore pressure difference p_b - p_j, as the plane
+  ghosts do (`ghosts.py`, module docstring): a geostatic column then stays linear across
+  the wall, where a plain average leaves its bottom row short of support. The polylines
+  of 2D do not add it (their bits are kept).
+
+Boundary particles are fixed in space, below (or behind) the surface on the soil's
+lattice. Unlike a mirror ghost, which coincides with a particle lying on the wall plane
+and then gives it neither support nor friction, they stay where they are: a particle
+that reaches the surface still has rows of them under it (docs/vv/collapse_3d.md).
+"""
+
+import math
+
+import numba as nb
+
+from psph.kernels.boundary import MOTION_FIXED, MOTION_FRICTION, MOTION_SLIP
+from psph.kernels.spline import w_cubic
+
+
+@nb.njit(cache=True, inline="always")
+def _cell_xyz(c, ncx, ncy):
+    """(cx, cy, cz) of cell c, x fastest (`neighbours.bin_particles`)."""
+    cx = c % ncx
+    cyz = c // ncx
+    return cx, cyz % ncy, cyz // ncy
+
+
+@nb.njit(cache=True, inline="always")
+def _add_sym(stress, b, a0, a1, a2, n0, n1, n2, f):
+    """stress[b] += f (a n^T + n a^T) in Voigt order xx, yy, zz, xy, yz, zx."""
+    stress[b, 0] += f * 2.0 * a0 * n0
+    stress[b, 1] += f * 2.0 * a1 * n1
+    stress[b, 2] += f * 2.0 * a2 * n2
+    stress[b, 3] += f * (a0 * n1 + a1 * n0)
+    stress[b, 4] += f * (a1 * n2 + a2 * n1)
+    stress[b, 5] += f * (a2 * n0 + a0 * n2)
+
+
+@nb.njit(cache=True)
+def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal, x, v,
+                      v_slip, stress, p, p_prev, poro, rho, perm, acc, head_b, body,
+                      cell_of, cell_start, order, ncell, h):
+    """State of the boundary rows first..first+n_b-1 (module docstring); src[r] is the
+    surface boundary particle of row first + r, with its surface's `motion`, `tan_phi`
+    and `drained`, and its soil normal `normal`. Also copies v into v_slip on rows
+    0..n_real-1. The 27 cells around a boundary particle are visited in a fixed order and
+    a cell's particles in key order: the sums are the same on any number of ranks while
+    every soil particle within 2h of it is a real row (a halo of 4h)."""
+    for j in range(n_real):
+        for d in range(3):
+            v_slip[j, d] = v[j, d]
+    ncx, ncy, ncz = ncell[0], ncell[1], ncell[2]
+    support2 = 4.0 * h * h
+    for r in range(n_b):
+        b = first + r
+        k = src[r]
+        cx, cy, cz = _cell_xyz(cell_of[b], ncx, ncy)
+        ws = sv0 = sv1 = sv2 = sa0 = sa1 = sa2 = 0.0
+        sp = spp = snn = 0.0
+        s0 = s1 = s2 = s3 = s4 = s5 = 0.0
+        sn = sr = sk = 0.0
+        for oz in range(-1, 2):
+            nz = cz + oz
+            if nz < 0 or nz >= ncz:
+                continue
+            for oy in range(-1, 2):
+                ny = cy + oy
+                if ny < 0 or ny >= ncy:
+                    continue
+                for ox in range(-1, 2):
+                    nx = cx + ox
+                    if nx < 0 or nx >= ncx:
+                        continue
+                    nc = (nz * ncy + ny) * ncx + nx
+                    for s in range(cell_start[nc], cell_start[nc + 1]):
+                        j = order[s]
+                        if j >= n_real:
+                            continue
+                        d0 = x[b, 0] - x[j, 0]
+                        d1 = x[b, 1] - x[j, 1]
+                        d2 = x[b, 2] - x[j, 2]
+                        r2 = d0 * d0 + d1 * d1 + d2 * d2
+                        if r2 >= support2:
+                            continue
+                        w = w_cubic(math.sqrt(r2), h)
+                        ws += w
+                        sv0 += w * v[j, 0]
+                        sv1 += w * v[j, 1]
+                        sv2 += w * v[j, 2]
+                        sa0 += w * acc[j, 0]
+                        sa1 += w * acc[j, 1]
+                        sa2 += w * acc[j, 2]
+                        if drained[k]:
+                            dp = -2.0 * p[j]
+                            spp -= w * p_prev[j]
+                        else:
+                            dp = head_b[0] * d0 + head_b[1] * d1 + head_b[2] * d2
+                            spp += w * (p_prev[j] + dp)
+                        sp += w * (p[j] + dp)
+                        weight = min(-rho[j] * (body[0] * d0 + body[1] * d1 + body[2] * d2),
+                                     0.0)
+                        snn += w * (weight + dp)
+                        s0 += w * stress[j, 0]
+                        s1 += w * stress[j, 1]
+                        s2 += w * stress[j, 2]
+                        s3 += w * stress[j, 3]
+                        s4 += w * stress[j, 4]
+                        s5 += w * stress[j, 5]
+                        sn += w * poro[j]
+                        sr += w * rho[j]
+                        sk += w * perm[j]
+        if ws == 0.0:
+            for d in range(3):
+                v[b, d] = v_slip[b, d] = acc[b, d] = 0.0
+            for q in range(6):
+                stress[b, q] = 0.0
+            p[b] = p_prev[b] = 0.0
+            poro[b] = 0.5
+            rho[b] = 1.0
+            perm[b] = 0.0
+            continue
+        iw = 1.0 / ws
+        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
+        stress[b, 0] = s0 * iw
+        stress[b, 1] = s1 * iw
+        stress[b, 2] = s2 * iw
+        stress[b, 3] = s3 * iw
+        stress[b, 4] = s4 * iw
+        stress[b, 5] = s5 * iw
+        # the normal stress continued across the wall (module docstring): += dnn n n^T
+        _add_sym(stress, b, n0, n1, n2, n0, n1, n2, 0.5 * snn * iw)
+        t0 = stress[b, 0] * n0 + stress[b, 3] * n1 + stress[b, 5] * n2
+        t1 = stress[b, 3] * n0 + stress[b, 1] * n1 + stress[b, 4] * n2
+        t2 = stress[b, 5] * n0 + stress[b, 4] * n1 + stress[b, 2] * n2
+        s_nn = t0 * n0 + t1 * n1 + t2 * n2
+        tau0 = t0 - s_nn * n0
+        tau1 = t1 - s_nn * n1
+        tau2 = t2 - s_nn * n2
+        mode = motion[k]
+        if mode == MOTION_FRICTION:
+            cap = tan_phi[k] * max(-s_nn, 0.0)
+            tau = math.sqrt(tau0 * tau0 + tau1 * tau1 + tau2 * tau2)
+            if tau <= cap:
+                mode = MOTION_FIXED
+            else:  # tau_b - tau = (2 cap / |tau| - 2) tau
+                _add_sym(stress, b, tau0, tau1, tau2, n0, n1, n2, 2.0 * cap / tau - 2.0)
+        elif mode == MOTION_SLIP:
+            _add_sym(stress, b, tau0, tau1, tau2, n0, n1, n2, -2.0)
+        vt0, vt1, vt2 = sv0 * iw, sv1 * iw, sv2 * iw
+        at0, at1, at2 = sa0 * iw, sa1 * iw, sa2 * iw
+        vn = vt0 * n0 + vt1 * n1 + vt2 * n2
+        an = at0 * n0 + at1 * n1 + at2 * n2
+        v_slip[b, 0] = vt0 - 2.0 * vn * n0
+        v_slip[b, 1] = vt1 - 2.0 * vn * n1
+        v_slip[b, 2] = vt2 - 2.0 * vn * n2
+        if mode == MOTION_FIXED:
+            v[b, 0], v[b, 1], v[b, 2] = -vt0, -vt1, -vt2
+            acc[b, 0], acc[b, 1], acc[b, 2] = -at0, -at1, -at2
+        else:
+            v[b, 0], v[b, 1], v[b, 2] = v_slip[b, 0], v_slip[b, 1], v_slip[b, 2]
+            acc[b, 0] = at0 - 2.0 * an * n0
+            acc[b, 1] = at1 - 2.0 * an * n1
+            acc[b, 2] = at2 - 2.0 * an * n2
+        p[b] = sp * iw
+        p_prev[b] = spp * iw
+        poro[b] = sn * iw
+        rho[b] = sr * iw
+        perm[b] = sk * iw
+
+
+@nb.njit(cache=True)
+def boundary_contact_3d(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
+                        grid_lo, ncell, cell_start, order, h):
+    """No penetration (safety net): an owned particle found on the wall side of the
+    tangent plane of its nearest boundary particle (within 2h, in this step's cell
+    lists) is reflected back across that plane and loses its velocity into the wall, as
+    `boundary.boundary_contact` does in 2D. Returns the number moved."""
+    ncx, ncy, ncz = ncell[0], ncell[1], ncell[2]
+    last = first + n_b
+    moved = 0
+    for i in range(n_owned):
+        cx = int(math.floor((x[i, 0] - origin[0]) / cell_size)) - grid_lo[0]
+        cy = int(math.floor((x[i, 1] - origin[1]) / cell_size)) - grid_lo[1]
+        cz = int(math.floor((x[i, 2] - origin[2]) / cell_size)) - grid_lo[2]
+        best = -1
+        best_r2 = 4.0 * h * h
+        for oz in range(-1, 2):
+            nz = cz + oz
+            if nz < 0 or nz >= ncz:
+                continue
+            for oy in range(-1, 2):
+                ny = cy + oy
+                if ny < 0 or ny >= ncy:
+                    continue
+                for ox in range(-1, 2):
+                    nx = cx + ox
+                    if nx < 0 or nx >= ncx:
+                        continue
+                    nc = (nz * ncy + ny) * ncx + nx
+                    for s in range(cell_start[nc], cell_start[nc + 1]):
+                        b = order[s]
+                        if b < first or b >= last:
+                            continue
+                        d0 = x[i, 0] - x[b, 0]
+                        d1 = x[i, 1] - x[b, 1]
+                        d2 = x[i, 2] - x[b, 2]
+                        r2 = d0 * d0 + d1 * d1 + d2 * d2
+                        if r2 < best_r2:
+                            best_r2 = r2
+                            best = b
+        if best < 0:
+            continue
+        k = src[best - first]
+        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
+        d = ((x[i, 0] - foot[k, 0]) * n0 + (x[i, 1] - foot[k, 1]) * n1
+             + (x[i, 2] - foot[k, 2]) * n2)
+        if d < 0.0:
+            x[i, 0] -= 2.0 * d * n0
+            x[i, 1] -= 2.0 * d * n1
+            x[i, 2] -= 2.0 * d * n2
+            u[i, 0] -= 2.0 * d * n0
+            u[i, 1] -= 2.0 * d * n1
+            u[i, 2] -= 2.0 * d * n2
+            vn = v[i, 0] * n0 + v[i, 1] * n1 + v[i, 2] * n2
+            if vn < 0.0:
+                v[i, 0] -= vn * n0
+                v[i, 1] -= vn * n1
+                v[i, 2] -= vn * n2
+            moved += 1
+    return moved
