@@ -34,9 +34,9 @@ def _best(fn, args, reps=10) -> float:
 
 
 def main() -> None:
+    import throughput
     from mpi4py import MPI
 
-    import throughput
     from psph.app.run import make_slabs
     from psph.config.load import resolve, validate
     from psph.kernels import interactions_batched

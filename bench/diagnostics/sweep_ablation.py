@@ -26,9 +26,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "performance"))
 
 
 def main() -> None:
+    import throughput
     from mpi4py import MPI
 
-    import throughput
     from psph.app.run import make_slabs
     from psph.config.load import resolve, validate
     from psph.solver.simulation import Simulation
