@@ -153,3 +153,26 @@ def test_collapse_3d_on_a_surface_floor_one_vs_two_ranks_bitwise(tmp_path_factor
     if comm.Get_rank() == 0:
         last = read_snapshots(out / "one" / "particles.h5")[-1]
         assert last["x"][:, 2].min() > 0.0 and np.abs(last["v"]).max() > 0.1
+
+
+@pytest.mark.mpi(min_size=2)
+def test_layers_between_elevation_grids_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """The two-material column between elevation grids (an .asc, a CSV) with a water
+    table grid (`tests/test_grids.py`): at rest for 0.05 s on 1 and 2 ranks, the same
+    bits, and within its overburden on both."""
+    from mpi4py import MPI
+
+    from tests.test_grids import _layered_scene, _reference
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    if comm.Get_rank() == 0:
+        _layered_scene(out)
+    comm.Barrier()
+    scene = load_scene(str(out / "grid_layers.toml"))
+    _one_vs_two(comm, scene, out, ())
+    if comm.Get_rank() == 0:
+        last = read_snapshots(out / "two" / "particles.h5")[-1]
+        sv, p = _reference(last["x"][:, 2] - last["u"][:, 2])
+        assert np.max(np.abs(last["p"] - p)) < 0.005 * p.max()
+        assert np.max(np.abs(last["stress"][:, 2] - sv)) < 0.02 * np.abs(sv).max()

@@ -85,7 +85,8 @@ def _within_support(soil, bx):
     return d < 2 * H
 
 
-def _state(motion, soil, bx, bn, v_soil, stress_soil, tan_phi=0.0, rho=2000.0, g=9.81):
+def _state(motion, soil, bx, bn, v_soil, stress_soil, tan_phi=0.0, rho=2000.0, g=9.81,
+           p_soil=0.0, drained=False, p_out=None):
     ns, nb = len(soil), len(bx)
     n = ns + nb
     x = np.concatenate([soil, bx])
@@ -94,11 +95,15 @@ def _state(motion, soil, bx, bn, v_soil, stress_soil, tan_phi=0.0, rho=2000.0, g
     v[:ns] = v_soil
     stress = np.zeros((n, 6))
     stress[:ns] = stress_soil
+    p = np.zeros(n)
+    p[:ns] = p_soil
     z = np.zeros
     boundary_state_3d(ns, ns, nb, np.arange(nb), np.full(nb, motion), np.full(nb, tan_phi),
-                      np.zeros(nb, np.bool_), bn, x, v, z((n, 3)), stress, z(n), z(n),
+                      np.full(nb, drained), bn, x, v, z((n, 3)), stress, p, p.copy(),
                       np.full(n, 0.4), np.full(n, rho), np.ones(n), z((n, 3)), z(3),
                       np.array([0.0, 0.0, -g]), cell_of, cell_start, order, ncell, H)
+    if p_out is not None:
+        p_out[:] = p[ns:]
     return v[ns:], stress[ns:]
 
 
@@ -132,16 +137,18 @@ def test_a_geostatic_stress_is_continued_linearly_below_the_floor():
 @pytest.mark.parametrize("shear, sticks", [(100.0, True), (2000.0, False)])
 def test_a_friction_surface_carries_at_most_the_coulomb_traction(shear, sticks):
     """Soil under sigma'_zz = -1000 Pa with a shear traction along (1, 1, 0) on a wall
-    of friction angle 30 deg: below tan(30) x 1000 = 577 Pa it sticks (the shear kept),
-    above it the pair traction (tau~ + tau_b) / 2 is the Coulomb limit along tau~."""
+    of friction angle 30 deg, under gravity: below tan(30) x 1000 = 577 Pa it sticks
+    (the shear kept), above it the pair traction (tau~ + tau_b) / 2 is the Coulomb limit
+    along tau~, from the soil's own normal stress (as in 2D), not the one continued to
+    the boundary particle's depth (more compressive)."""
     soil, bx, bn = _soil_on_floor()
     s = np.zeros((len(soil), 6))
     s[:, 2] = -1000.0
     s[:, 4] = s[:, 5] = shear / np.sqrt(2.0)  # yz, zx: tau = shear (1, 1, 0) / sqrt 2
     u = np.array([0.3, 0.3, 0.0])
     v, sb = _state(MOTION_FRICTION, soil, bx, bn, u, s, tan_phi=np.tan(np.radians(30.0)),
-                   rho=0.0)
-    reached = sb[:, 2] != 0.0
+                   rho=2000.0)
+    reached = _within_support(soil, bx)
     tau_b = sb[reached][:, [5, 4]]  # (zx, yz): the traction's x and y on the plane z
     pair = 0.5 * (tau_b + shear / np.sqrt(2.0))
     if sticks:
@@ -150,7 +157,32 @@ def test_a_friction_surface_carries_at_most_the_coulomb_traction(shear, sticks):
         cap = np.tan(np.radians(30.0)) * 1000.0
         assert np.allclose(pair, cap / np.sqrt(2.0), rtol=1e-12)
         assert np.allclose(v[reached], u)  # slides: the tangential velocity kept
-    assert np.allclose(sb[reached, 2], -1000.0)
+    assert np.all(sb[reached, 2] < -1000.0 - 100.0)  # the weight continued below the floor
+
+
+def test_a_side_wall_continues_no_weight_and_a_drained_one_mirrors_p():
+    """Around a cube (soil outside, geostatic): the boundary particles of its vertical
+    faces get the soil's averaged normal stress whether gravity is on or off (the weight
+    across a wall is along its normal: none on a side wall), those under its top face a
+    more compressive one with gravity; drained, p_b = -p~ (p = 0 on the surface)."""
+    v, tri = _cube(0.3, 0.7)
+    bx, bn, _ = surface_particles(v, tri, "outside", DX, H, [0.0] * 3, [-1.0] * 3, [2.0] * 3)
+    g = (np.arange(10) + 0.5) * DX
+    pts = np.array(np.meshgrid(g, g, g, indexing="ij")).reshape(3, -1).T
+    soil = pts[~np.all((pts > 0.3) & (pts < 0.7), axis=1)]
+    s = np.zeros((len(soil), 6))
+    s[:, 2] = -2000.0 * 9.81 * (1.0 - soil[:, 2])
+    s[:, 0] = s[:, 1] = 0.5 * s[:, 2]
+    _, with_g = _state(MOTION_FIXED, soil, bx, bn, 0.0, s, g=9.81)
+    _, without = _state(MOTION_FIXED, soil, bx, bn, 0.0, s, g=0.0)
+    p = np.zeros(len(bx))
+    _state(MOTION_FIXED, soil, bx, bn, 0.0, s, p_soil=500.0, drained=True, p_out=p)
+    side = np.abs(bn[:, 0]) == 1.0
+    top = bn[:, 2] == 1.0
+    assert side.any() and top.any()
+    assert np.allclose(with_g[side, 0], without[side, 0], rtol=1e-12)
+    assert np.all(with_g[top, 2] < without[top, 2] - 100.0)
+    assert np.allclose(p[_within_support(soil, bx)], -500.0)
 
 
 @pytest.mark.parametrize("surface, words", [
@@ -162,6 +194,10 @@ def test_a_friction_surface_carries_at_most_the_coulomb_traction(shear, sticks):
      ["boundaries.surfaces[0].triangles", "3", "from 0 to 2"]),
     ("{mesh='nowhere.stl', soil='above'}", ["boundaries.surfaces[0].mesh", "no such file"]),
     ("{soil='above'}", ["boundaries.surfaces[0]", "either mesh"]),
+    ("{vertices=[[0,0,0],[1,0],[0,1,0]], triangles=[[0,1,2]], soil='above'}",
+     ["boundaries.surfaces[0].vertices", "three numbers a vertex"]),
+    ("{vertices=[[0,0,0],[1,0,nan],[0,1,0]], triangles=[[0,1,2]], soil='above'}",
+     ["boundaries.surfaces[0].vertices", "finite"]),
     ("{vertices=[[0,0,0],[1,0,0],[0,1,0]], triangles=[[0,1,2]], soil='above', "
      "motion='friction'}", ["boundaries.surfaces[0].friction_angle", "required"]),
 ])

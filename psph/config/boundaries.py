@@ -72,12 +72,15 @@ class Polyline(_Model):
 class Surface(_Model):
     """A rigid surface in 3D, fixed in space (`[[boundaries.surfaces]]`), lined with
     boundary particles on the soil's lattice (`geometry/surfaces.py`): a mesh file meshio
-    reads (STL, OBJ, PLY, VTK, ...; its triangles and quads), or vertices and triangles
-    inline. soil: "above" / "below" a surface z(x, y), or "outside" / "inside" a closed
-    one. motion, friction_angle and drained as on a polyline."""
+    reads (STL, OBJ, PLY, VTK, ...; its triangles and quads), an elevation grid (two
+    triangles a cell, `geometry/grids.py`), or vertices and triangles inline. soil:
+    "above" / "below" a surface z(x, y), or "outside" / "inside" a closed one. motion,
+    friction_angle and drained as on a polyline."""
 
     mesh: str | None = Field(None, description="Path of a surface mesh file meshio reads "
-                             "(triangles, quads); or give vertices and triangles")
+                             "(triangles, quads); or give grid, or vertices and triangles")
+    grid: str | None = Field(None, description="Path of an elevation grid (ESRI .asc or an "
+                             "x, y, z CSV), two triangles a cell with data: a bedrock")
     vertices: list[list[float]] | None = Field(
         None, description="Inline vertices [[x, y, z], ...] [m]")
     triangles: list[list[int]] | None = Field(
@@ -101,9 +104,24 @@ def triangles_of(surface: Surface, key: str = "surface") -> tuple[np.ndarray, np
     from psph.errors import SceneError
     from psph.geometry.shapes import mesh_triangles
 
-    if (surface.mesh is None) == (surface.vertices is None and surface.triangles is None):
-        raise SceneRule(key, "mesh" if surface.mesh else "none",
-                        "give either mesh (a file) or vertices and triangles")
+    given = [k for k in ("mesh", "grid") if getattr(surface, k) is not None]
+    if surface.vertices is not None or surface.triangles is not None:
+        given.append("vertices and triangles")
+    if len(given) != 1:
+        raise SceneRule(key, " and ".join(given) or "none",
+                        "give either mesh (a file), grid (an elevation grid) or vertices "
+                        "and triangles")
+    if surface.grid is not None:
+        from psph.geometry.grids import GridError, grid_triangles, read_grid
+
+        try:
+            points, tri = grid_triangles(read_grid(surface.grid))
+        except GridError as e:
+            raise SceneRule(f"{key}.grid = {e.where}", e.value, e.rule) from None
+        if not len(tri):
+            raise SceneRule(f"{key}.grid", surface.grid, "no cell with data at its four "
+                            "corners")
+        return points, tri
     if surface.mesh is not None:
         from pathlib import Path
 
@@ -113,16 +131,29 @@ def triangles_of(surface: Surface, key: str = "surface") -> tuple[np.ndarray, np
         if not len(tri) or points.shape[1] != 3:
             raise SceneError(f"{key}.mesh = {surface.mesh!r}: no triangle or quad faces "
                              "in 3D")
+        if not np.all(np.isfinite(points)):
+            raise SceneError(f"{key}.mesh = {surface.mesh!r}: non-finite vertex "
+                             "coordinates")
         return points, tri
     if surface.vertices is None or surface.triangles is None:
         raise SceneRule(key, "vertices" if surface.triangles is None else "triangles",
                         "inline needs both vertices and triangles")
-    points = np.asarray(surface.vertices, float)
-    tri = np.asarray(surface.triangles, np.int64)
+    try:
+        points = np.asarray(surface.vertices, float)
+    except ValueError:
+        points = np.zeros((0, 0))
     if points.ndim != 2 or points.shape[1] != 3 or not len(points):
-        raise SceneRule(f"{key}.vertices", surface.vertices, "needs [[x, y, z], ...]")
+        raise SceneRule(f"{key}.vertices", "given", "needs [[x, y, z], ...], three "
+                        "numbers a vertex")
+    if not np.all(np.isfinite(points)):
+        raise SceneRule(f"{key}.vertices", "non-finite", "coordinates must be finite")
+    try:
+        tri = np.asarray(surface.triangles, np.int64)
+    except (ValueError, TypeError):
+        tri = np.zeros((0, 0), np.int64)
     if tri.ndim != 2 or tri.shape[1] != 3 or not len(tri):
-        raise SceneRule(f"{key}.triangles", surface.triangles, "needs [[i, j, k], ...]")
+        raise SceneRule(f"{key}.triangles", "given", "needs [[i, j, k], ...], three "
+                        "vertex indices a triangle")
     if tri.min() < 0 or tri.max() >= len(points):
         raise SceneRule(f"{key}.triangles", int(tri.max() if tri.max() >= len(points)
                                                 else tri.min()),

@@ -6,10 +6,14 @@ exit 2."""
 import math
 from pathlib import Path
 
+import numpy as np
+
 from psph.config.boundaries import triangles_of
 from psph.config.materials import check_materials
 from psph.errors import SceneRule as _Rule
 from psph.geometry.box import side_planes
+from psph.geometry.grids import GridError, check_cover, check_layer_grids, is_grid_file, read_grid
+from psph.geometry.lattice import lattice_axes
 from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
 from psph.geometry.solids import read_surface
 from psph.geometry.surfaces import soil_normals
@@ -41,7 +45,11 @@ def check_scene(scene):
                     "give at least one [[particles.blocks]], [[particles.polygons]], "
                     "[[particles.meshes]] or [[particles.layers]]")
     for il, layer in enumerate(pa.layers):
-        check_layer_profiles(layer, f"particles.layers[{il}]")
+        if dim == 2:
+            check_layer_profiles(layer, f"particles.layers[{il}]")
+        else:  # elevation grids, with data over every lattice column (issue 38)
+            axes = lattice_axes(lo, hi, scene.particles.dx)
+            check_layer_grids(layer, f"particles.layers[{il}]", axes[0], axes[1])
     for ip, poly in enumerate(pa.polygons):
         for iv, v in enumerate(poly.vertices):
             for d in range(2):
@@ -76,7 +84,18 @@ def check_scene(scene):
     if scene.material is None:
         scene.material = mats[0]
     table = scene.initial.water_table
-    if table is not None and table != "surface":
+    if dim == 3 and isinstance(table, str) and table != "surface":
+        if not is_grid_file(table):
+            raise _Rule("initial.water_table", table, "in 3D a water table is a level or an "
+                        "elevation grid (an ESRI .asc file or an x, y, z CSV)")
+        axes = lattice_axes(lo, hi, scene.particles.dx)
+        gx, gy = (a.ravel() for a in np.meshgrid(axes[0], axes[1]))
+        try:
+            check_cover(read_grid(table), gx, gy, "the domain's lattice columns need a "
+                        "water table")
+        except GridError as e:
+            raise _Rule(f"initial.water_table = {e.where}", e.value, e.rule) from None
+    elif table is not None and table != "surface":
         try:
             check_water_table(table, scene.domain.min, scene.domain.max)
         except ProfileError as e:
@@ -195,18 +214,19 @@ def check_dimension(scene) -> None:
                             "3D only (a 2D scene has left, right, bottom, top)")
         return
     pa = scene.particles
-    two_d = [("particles.polygons", pa.polygons), ("particles.layers", pa.layers),
+    two_d = [("particles.polygons", pa.polygons),
              ("boundaries.polylines", b.polylines),
              ("remove.polygon", [r for r in scene.remove if r.polygon is not None]),
              ("loads.range", [ld for ld in scene.loads if ld.range is not None]),
              ("initial.water_table", [] if scene.initial.water_table is None
-              or isinstance(scene.initial.water_table, float) else [1]),
+              or isinstance(scene.initial.water_table, (float, str)) else [1]),
              ("initial.undrained_load", [1] if scene.initial.undrained_load else [])]
     for key, items in two_d:
         if items:
             raise _Rule(key, f"{len(items)} given", "2D only so far (dim = 3 takes "
-                        "particles.blocks, particles.meshes (closed surfaces), box sides, "
-                        "boundaries.surfaces, a level water table)")
+                        "particles.blocks, particles.meshes (closed surfaces), particles.layers "
+                        "between elevation grids, box sides, boundaries.surfaces, a level "
+                        "water table)")
 
 
 def check_cryer(scene) -> None:

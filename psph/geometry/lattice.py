@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from psph.geometry.grids import check_layer_grids
 from psph.geometry.profiles import check_layer_profiles, inside_layer
 from psph.geometry.shapes import inside_polygon, inside_triangles, read_mesh
 from psph.geometry.solids import inside_surface, read_surface
@@ -121,8 +122,9 @@ class Fill:
 
 
 class Fill3D:
-    """The closed surface meshes (`particles.meshes`, read once), the spheres and the
-    cylinders of a 3D scene, and the domain lattice points inside them
+    """The closed surface meshes (`particles.meshes`, read once), the spheres, the
+    cylinders and the layers between elevation grids of a 3D scene, and the domain
+    lattice points inside them
     (`solids.inside_surface`), in lattice order (x fastest, then y, then z). Every process
     evaluates the whole mask of their bounding box (a bool a lattice point: 10^7 points in
     10 MB)."""
@@ -135,18 +137,28 @@ class Fill3D:
         self.spheres = [(np.array(sp.centre, float), sp.radius) for sp in pa.spheres]
         self.cylinders = [(np.array(cy.base, float), cy.radius, cy.height)
                           for cy in pa.cylinders]
+        axes = lattice_axes(scene.domain.min, scene.domain.max, dx)
+        # soil between elevation grids, z at every lattice column (issue 38)
+        self.layers = [check_layer_grids(layer, f"particles.layers[{il}]", axes[0], axes[1])
+                       for il, layer in enumerate(pa.layers)]
         self.indices = [material_index(scene, m.material)
-                        for m in (*pa.meshes, *pa.spheres, *pa.cylinders)]
-        self.empty = not (self.surfaces or self.spheres or self.cylinders)
+                        for m in (*pa.meshes, *pa.spheres, *pa.cylinders, *pa.layers)]
+        self.empty = not (self.surfaces or self.spheres or self.cylinders or self.layers)
         if self.empty:
             return
-        axes = lattice_axes(scene.domain.min, scene.domain.max, dx)
+        gy, gx = np.meshgrid(axes[1], axes[0], indexing="ij")
+        layer_z = [(top.at(gx, gy), bottom.at(gx, gy)) for top, bottom in self.layers]
+        xy = [axes[0][0], axes[0][-1], axes[1][0], axes[1][-1]]
         pts = np.concatenate([p for p, _ in self.surfaces]
                              + [np.stack([c - r, c + r]) for c, r in self.spheres]
                              + [np.stack([c - [r, r, 0], c + [r, r, h]])
-                                for c, r, h in self.cylinders])
+                                for c, r, h in self.cylinders]
+                             + [np.array([[xy[0], xy[2], zb.min()], [xy[1], xy[3], zt.max()]])
+                                for zt, zb in layer_z])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        self.idx = [np.flatnonzero((c >= lo[d]) & (c <= hi[d])) for d, c in enumerate(axes)]
+        eps = 1e-9 * max(np.abs(pts).max(), 1.0)
+        self.idx = [np.flatnonzero((c >= lo[d] - eps) & (c <= hi[d] + eps))
+                    for d, c in enumerate(axes)]
         self.axes = [c[i] for c, i in zip(axes, self.idx, strict=True)]
         masks = [inside_surface(*self.axes, p, t, dx) for p, t in self.surfaces]
         zz, yy, xx = np.meshgrid(self.axes[2], self.axes[1], self.axes[0], indexing="ij")
@@ -154,6 +166,9 @@ class Fill3D:
                   for c, r in self.spheres]
         masks += [((xx - c[0]) ** 2 + (yy - c[1]) ** 2 <= r * r) & (zz >= c[2])
                   & (zz <= c[2] + h) for c, r, h in self.cylinders]
+        cols = np.ix_(self.idx[1], self.idx[0])
+        masks += [(zz >= zb[cols][None] - eps) & (zz <= zt[cols][None] + eps)
+                  for zt, zb in layer_z]
         self.mask = np.logical_or.reduce(masks)
         self.material = np.zeros(self.mask.shape)
         for m, k in zip(masks, self.indices, strict=True):
@@ -226,6 +241,13 @@ def estimate_count(scene) -> float:
             c, r, h = np.array(cy.base, float), cy.radius, cy.height
             boxes.append((c - [r, r, 0.0], c + [r, r, h]))
             volumes.append(inside(np.pi * r * r * h, *boxes[-1]))
+        if pa.layers:  # between elevation grids: their box over the domain's columns
+            fill3 = Fill3D(scene)
+            for zt, zb in ((t.at(*_columns(scene)), b.at(*_columns(scene)))
+                           for t, b in fill3.layers):
+                boxes.append((np.array([dom_lo[0], dom_lo[1], np.nanmin(zb)]),
+                              np.array([dom_hi[0], dom_hi[1], np.nanmax(zt)])))
+                volumes.append(float(np.nansum(zt - zb)) * dx * dx)
     if boxes:
         lo = np.min([b[0] for b in boxes], axis=0)
         hi = np.max([b[1] for b in boxes], axis=0)
@@ -262,6 +284,13 @@ def occupancy(scene):
         return taken
 
     return occupied
+
+
+def _columns(scene) -> tuple[np.ndarray, np.ndarray]:
+    """x and y of every lattice column of the domain (flat)."""
+    c = lattice_axes(scene.domain.min, scene.domain.max, scene.particles.dx)
+    gx, gy = np.meshgrid(c[0], c[1])
+    return gx.ravel(), gy.ravel()
 
 
 def material_index(scene, name: str | None) -> int:

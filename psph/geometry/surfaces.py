@@ -28,7 +28,8 @@ import numpy as np
 
 from psph.errors import SceneError
 
-MAX_LATTICE_POINTS = 50_000_000  # the dense search box over a surface's bounds
+MAX_LATTICE_POINTS = 10_000_000  # the dense search box over a surface's bounds
+# (about 50 bytes a point on every rank)
 
 
 @nb.njit(cache=True)

@@ -13,11 +13,13 @@ porosity, density and conductivity. Two things are 3D-specific:
   + n tau^T)), and on a friction wall, where |tau| exceeds tau_max = tan(phi_b)
   max(-sigma'_nn, 0), set to tau_b = 2 tau_max tau / |tau| - tau, so that the pair stress
   of Eq. (26), (tau + tau_b) / 2, carries the Coulomb limit along tau;
-- the wall-normal total stress is continued with the weight of the soil between j and b,
-  min(-rho_j b.(x_b - x_j), 0), and the pore pressure difference p_b - p_j, as the plane
-  ghosts do (`ghosts.py`, module docstring): a geostatic column then stays linear across
-  the wall, where a plain average leaves its bottom row short of support. The polylines
-  of 2D do not add it (their bits are kept).
+- the wall-normal total stress is continued with the weight of the soil between j and b
+  across the wall, min(-rho_j (b.n)(n.(x_b - x_j)), 0) (zero on a side wall, whose
+  normal is horizontal), and the pore pressure difference p_b - p_j, as the plane ghosts
+  do (`ghosts.py`, module docstring): a geostatic column then stays linear across the
+  wall, where a plain average leaves its bottom row short of support. The polylines of
+  2D do not add it (their bits are kept). The friction's normal stress is the soil's
+  averaged one, before this continuation, as in 2D.
 
 Boundary particles are fixed in space, below (or behind) the surface on the soil's
 lattice. Unlike a mirror ghost, which coincides with a particle lying on the wall plane
@@ -71,6 +73,8 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
         b = first + r
         k = src[r]
         cx, cy, cz = _cell_xyz(cell_of[b], ncx, ncy)
+        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
+        bn = body[0] * n0 + body[1] * n1 + body[2] * n2
         ws = sv0 = sv1 = sv2 = sa0 = sa1 = sa2 = 0.0
         sp = spp = snn = 0.0
         s0 = s1 = s2 = s3 = s4 = s5 = 0.0
@@ -113,8 +117,9 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
                             dp = head_b[0] * d0 + head_b[1] * d1 + head_b[2] * d2
                             spp += w * (p_prev[j] + dp)
                         sp += w * (p[j] + dp)
-                        weight = min(-rho[j] * (body[0] * d0 + body[1] * d1 + body[2] * d2),
-                                     0.0)
+                        # the weight of the soil between j and b across the wall: the
+                        # normal components only, as the ghosts' (zero on a side wall)
+                        weight = min(-rho[j] * bn * (n0 * d0 + n1 * d1 + n2 * d2), 0.0)
                         snn += w * (weight + dp)
                         s0 += w * stress[j, 0]
                         s1 += w * stress[j, 1]
@@ -136,15 +141,14 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
             perm[b] = 0.0
             continue
         iw = 1.0 / ws
-        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
         stress[b, 0] = s0 * iw
         stress[b, 1] = s1 * iw
         stress[b, 2] = s2 * iw
         stress[b, 3] = s3 * iw
         stress[b, 4] = s4 * iw
         stress[b, 5] = s5 * iw
-        # the normal stress continued across the wall (module docstring): += dnn n n^T
-        _add_sym(stress, b, n0, n1, n2, n0, n1, n2, 0.5 * snn * iw)
+        # the traction of the soil's averaged stress on the wall: the friction's normal
+        # stress (as in 2D), and the shear that slip and friction change
         t0 = stress[b, 0] * n0 + stress[b, 3] * n1 + stress[b, 5] * n2
         t1 = stress[b, 3] * n0 + stress[b, 1] * n1 + stress[b, 4] * n2
         t2 = stress[b, 5] * n0 + stress[b, 4] * n1 + stress[b, 2] * n2
@@ -162,6 +166,9 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
                 _add_sym(stress, b, tau0, tau1, tau2, n0, n1, n2, 2.0 * cap / tau - 2.0)
         elif mode == MOTION_SLIP:
             _add_sym(stress, b, tau0, tau1, tau2, n0, n1, n2, -2.0)
+        # the normal stress continued across the wall (module docstring): += dnn n n^T,
+        # which leaves the tangential traction as it is
+        _add_sym(stress, b, n0, n1, n2, n0, n1, n2, 0.5 * snn * iw)
         vt0, vt1, vt2 = sv0 * iw, sv1 * iw, sv2 * iw
         at0, at1, at2 = sa0 * iw, sa1 * iw, sa2 * iw
         vn = vt0 * n0 + vt1 * n1 + vt2 * n2

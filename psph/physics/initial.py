@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from psph.geometry.box import outward_normal, side_planes
+from psph.geometry.grids import read_grid
 from psph.geometry.lattice import SERIAL, extent, occupancy, seed
 from psph.geometry.profiles import read_profile
 from psph.geometry.shapes import surface_layer
@@ -139,13 +140,16 @@ def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
 
 
 def table_elevation(table, x: np.ndarray) -> np.ndarray:
-    """Elevation of a water table given as a level (m) or as a phreatic profile
-    ([[x, z], ...] or a CSV path, psph/geometry/profiles.py) at the abscissae x: linear
-    between the profile's points, held at its end values beyond them."""
+    """Elevation of a water table given as a level (m), a phreatic profile ([[x, z], ...]
+    or a CSV path, psph/geometry/profiles.py) or, in 3D, an elevation grid
+    (psph/geometry/grids.py) at the positions x (n, dim): a profile linear between its
+    points and held at its end values beyond them, a grid bilinear."""
     if isinstance(table, (int, float)):
         return np.full(len(x), float(table))
+    if x.shape[1] == 3:
+        return read_grid(table).at(x[:, 0], x[:, 1])
     points = read_profile(table)
-    return np.interp(x, points[:, 0], points[:, 1])
+    return np.interp(x[:, 0], points[:, 0], points[:, 1])
 
 
 def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
@@ -188,7 +192,7 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
     depth = top[column] + 0.5 * dx - x[:, vz]
     if init.water_table is not None:
         head = depth - 0.5 * dx if init.water_table == "surface" \
-            else table_elevation(init.water_table, x[:, 0]) - x[:, vz]
+            else table_elevation(init.water_table, x) - x[:, vz]
         p = scene.material.rho_l * g * np.maximum(head, 0.0)
         if scene.pressure.drained_boundary == "layer":
             p = np.where(np.isfinite(data["drained_from"]) & (data["drained_from"] <= 0.0),

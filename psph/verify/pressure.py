@@ -113,7 +113,7 @@ def table_level(x: np.ndarray, scene, surface_y: np.ndarray | float | None = Non
         else np.broadcast_to(np.asarray(surface_y, dtype=float), (len(x),))
     if table == "surface":
         return np.array(surface, dtype=float)
-    return np.minimum(table_elevation(table, x[:, 0]), surface)
+    return np.minimum(table_elevation(table, x), surface)
 
 
 def excess_pressure(snap: dict, scene, comm=None) -> np.ndarray:
