@@ -59,12 +59,18 @@ def main() -> None:
     sim.kernels = sim.kernels._replace(pair_sums=capture)
     sim._interactions()
     n_total, n_owned, n_real, f, cells, par, sums, rec = captured["args"]
+    n_slots = int(cells.cell_start[int(np.prod(cells.ncell))])
+    packed = np.zeros((n_slots, interactions_batched.NPACK))
+    interactions_batched.pack_pair_fields(cells.order, n_slots, f.x, f.v, f.v_slip, f.stress,
+                                          f.p, f.p_prev, f.poro, f.vol, f.rho, f.perm, f.acc,
+                                          packed)
     out = {}
-    for name, fn in (("scalar", pair_sums_3d),
-                     ("batched", interactions_batched.pair_sums_batched)):
+    for name, fn, cl in (("scalar", pair_sums_3d, cells),
+                         ("batched", interactions_batched.pair_sums_batched,
+                          cells._replace(x_sorted=packed))):
         s = np.zeros_like(sums)
         r = PairRecord(np.zeros_like(rec.pairs), np.zeros_like(rec.pair_g))
-        args = (n_total, n_owned, n_real, f, cells, par, s, r)
+        args = (n_total, n_owned, n_real, f, cl, par, s, r)
         n = fn(*args)
         out[name] = (n, s[:n_owned].copy(), r, _best(fn, args))
     (n1, s1, r1, t1), (n2, s2, r2, t2) = out["scalar"], out["batched"]
