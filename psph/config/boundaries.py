@@ -39,7 +39,21 @@ class Boundary(_Model):
         "side (a check only: the wall is the same free-slip wall)")
 
 
-class Polyline(_Model):
+class _RigidWall(_Model):
+    """What a rigid wall lined with boundary particles does: its motion, friction and
+    drainage (`kernels/boundary.py`, `kernels/boundary_3d.py`)."""
+
+    motion: Literal["fixed", "slip", "friction"] = Field(
+        "fixed", description="\"fixed\" (no slip), \"slip\" (frictionless) or "
+        "\"friction\" (Coulomb)")
+    friction_angle: float | None = Field(
+        None, description="Wall friction angle φ_b, 0 ≤ φ_b < 90; required with and only "
+        "with motion = \"friction\" [deg]")
+    drained: bool = Field(False, description="true holds p = 0 on the wall; false is "
+                          "impermeable")
+
+
+class Polyline(_RigidWall):
     """A rigid boundary along a polyline, fixed in space (`[[boundaries.polylines]]`).
 
     motion: "fixed" (no slip), "slip" (frictionless) or "friction" (Coulomb, with
@@ -56,20 +70,12 @@ class Polyline(_Model):
     soil: Literal["above", "below", "left", "right"] = Field(
         description="Side the soil is on: \"above\"/\"below\" (profile) or "
         "\"left\"/\"right\" (wall)")
-    motion: Literal["fixed", "slip", "friction"] = Field(
-        "fixed", description="\"fixed\" (no slip), \"slip\" (frictionless) or "
-        "\"friction\" (Coulomb)")
-    friction_angle: float | None = Field(
-        None, description="Wall friction angle φ_b, 0 ≤ φ_b < 90; required with and only "
-        "with motion = \"friction\" [deg]")
-    drained: bool = Field(False, description="true holds p = 0 on the line; false is "
-                          "impermeable")
     rows: Literal["line", "lattice"] = Field(
         "line", description="Boundary rows \"line\" ((k + ½) dx from the line) or "
         "\"lattice\" (on the soil's lattice)")
 
 
-class Surface(_Model):
+class Surface(_RigidWall):
     """A rigid surface in 3D, fixed in space (`[[boundaries.surfaces]]`), lined with
     boundary particles on the soil's lattice (`geometry/surfaces.py`): a mesh file meshio
     reads (STL, OBJ, PLY, VTK, ...; its triangles and quads), an elevation grid (two
@@ -88,14 +94,6 @@ class Surface(_Model):
     soil: Literal["above", "below", "outside", "inside"] = Field(
         description="Side the soil is on: \"above\"/\"below\" (a surface z(x, y)) or "
         "\"outside\"/\"inside\" (a closed surface)")
-    motion: Literal["fixed", "slip", "friction"] = Field(
-        "fixed", description="\"fixed\" (no slip), \"slip\" (frictionless) or "
-        "\"friction\" (Coulomb)")
-    friction_angle: float | None = Field(
-        None, description="Wall friction angle φ_b, 0 ≤ φ_b < 90; required with and only "
-        "with motion = \"friction\" [deg]")
-    drained: bool = Field(False, description="true holds p = 0 on the surface; false is "
-                          "impermeable")
 
 
 def triangles_of(surface: Surface, key: str = "surface") -> tuple[np.ndarray, np.ndarray]:

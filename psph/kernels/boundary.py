@@ -1,5 +1,5 @@
 """Boundary particles of rigid polylines (issue 16): their state each step, and the
-no-penetration safety net.
+no-penetration safety net (2D and 3D).
 
 The state follows the generalized wall boundary condition of Adami, Hu & Adams (2012,
 J. Comput. Phys. 231, 7057), with the conventions of the plane mirror ghosts
@@ -184,53 +184,65 @@ def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x,
 def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
                      grid_lo, ncell, cell_start, order, h):
     """No penetration (safety net): an owned particle found on the wall side of the line
-    of its nearest boundary particle (within 2h, in the cell lists of this step) is
-    reflected back across that line, (x - foot) . n -> -(x - foot) . n, and loses its
-    velocity into the wall, as `ghosts.wall_contact` does for planes. Returns the number
-    moved."""
+    (in 3D the tangent plane) of its nearest boundary particle (within 2h, in the cell
+    lists of this step) is reflected back across it, (x - foot) . n -> -(x - foot) . n,
+    and loses its velocity into the wall, as `ghosts.wall_contact` does for planes. 2D
+    or 3D by x (the 2D arithmetic in its own order). Returns the number moved."""
+    three = x.shape[1] == 3
     ncx = ncell[0]
     ncy = ncell[1]
+    ncz = ncell[2] if three else 1
+    oz_lo = -1 if three else 0
+    oz_hi = 2 if three else 1
     last = first + n_b
     moved = 0
     for i in range(n_owned):
         cx = int(math.floor((x[i, 0] - origin[0]) / cell_size)) - grid_lo[0]
         cy = int(math.floor((x[i, 1] - origin[1]) / cell_size)) - grid_lo[1]
+        cz = int(math.floor((x[i, 2] - origin[2]) / cell_size)) - grid_lo[2] if three else 0
         best = -1
         best_r2 = 4.0 * h * h
-        for oy in range(-1, 2):
-            ny = cy + oy
-            if ny < 0 or ny >= ncy:
+        for oz in range(oz_lo, oz_hi):
+            nz = cz + oz
+            if nz < 0 or nz >= ncz:
                 continue
-            for ox in range(-1, 2):
-                nx = cx + ox
-                if nx < 0 or nx >= ncx:
+            for oy in range(-1, 2):
+                ny = cy + oy
+                if ny < 0 or ny >= ncy:
                     continue
-                nc = ny * ncx + nx
-                for s in range(cell_start[nc], cell_start[nc + 1]):
-                    b = order[s]
-                    if b < first or b >= last:
+                for ox in range(-1, 2):
+                    nx = cx + ox
+                    if nx < 0 or nx >= ncx:
                         continue
-                    d0 = x[i, 0] - x[b, 0]
-                    d1 = x[i, 1] - x[b, 1]
-                    r2 = d0 * d0 + d1 * d1
-                    if r2 < best_r2:
-                        best_r2 = r2
-                        best = b
+                    nc = (nz * ncy + ny) * ncx + nx
+                    for s in range(cell_start[nc], cell_start[nc + 1]):
+                        b = order[s]
+                        if b < first or b >= last:
+                            continue
+                        d0 = x[i, 0] - x[b, 0]
+                        d1 = x[i, 1] - x[b, 1]
+                        r2 = d0 * d0 + d1 * d1
+                        if three:
+                            d2 = x[i, 2] - x[b, 2]
+                            r2 += d2 * d2
+                        if r2 < best_r2:
+                            best_r2 = r2
+                            best = b
         if best < 0:
             continue
         k = src[best - first]
-        n0 = normal[k, 0]
-        n1 = normal[k, 1]
-        d = (x[i, 0] - foot[k, 0]) * n0 + (x[i, 1] - foot[k, 1]) * n1
+        d = (x[i, 0] - foot[k, 0]) * normal[k, 0] + (x[i, 1] - foot[k, 1]) * normal[k, 1]
+        if three:
+            d += (x[i, 2] - foot[k, 2]) * normal[k, 2]
         if d < 0.0:
-            x[i, 0] -= 2.0 * d * n0
-            x[i, 1] -= 2.0 * d * n1
-            u[i, 0] -= 2.0 * d * n0
-            u[i, 1] -= 2.0 * d * n1
-            vn = v[i, 0] * n0 + v[i, 1] * n1
+            vn = 0.0
+            for q in range(x.shape[1]):
+                x[i, q] -= 2.0 * d * normal[k, q]
+                u[i, q] -= 2.0 * d * normal[k, q]
+                vn += v[i, q] * normal[k, q]
             if vn < 0.0:
-                v[i, 0] -= vn * n0
-                v[i, 1] -= vn * n1
+                for q in range(x.shape[1]):
+                    v[i, q] -= vn * normal[k, q]
             moved += 1
     return moved
 

@@ -1,5 +1,5 @@
-"""Boundary particles of rigid surfaces in 3D (issue 37): their state each step and the
-no-penetration safety net, the 3D form of `boundary.py` (polylines in 2D).
+"""Boundary particles of rigid surfaces in 3D (issue 37): their state each step, the 3D
+form of `boundary.py` (polylines in 2D; its `boundary_contact` serves both).
 
 As in 2D (Adami, Hu & Adams 2012, with the plane ghosts' conventions), a boundary
 particle b with unit normal n (into the soil) takes the Shepard averages f~_b of the soil
@@ -189,65 +189,3 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
         poro[b] = sn * iw
         rho[b] = sr * iw
         perm[b] = sk * iw
-
-
-@nb.njit(cache=True)
-def boundary_contact_3d(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
-                        grid_lo, ncell, cell_start, order, h):
-    """No penetration (safety net): an owned particle found on the wall side of the
-    tangent plane of its nearest boundary particle (within 2h, in this step's cell
-    lists) is reflected back across that plane and loses its velocity into the wall, as
-    `boundary.boundary_contact` does in 2D. Returns the number moved."""
-    ncx, ncy, ncz = ncell[0], ncell[1], ncell[2]
-    last = first + n_b
-    moved = 0
-    for i in range(n_owned):
-        cx = int(math.floor((x[i, 0] - origin[0]) / cell_size)) - grid_lo[0]
-        cy = int(math.floor((x[i, 1] - origin[1]) / cell_size)) - grid_lo[1]
-        cz = int(math.floor((x[i, 2] - origin[2]) / cell_size)) - grid_lo[2]
-        best = -1
-        best_r2 = 4.0 * h * h
-        for oz in range(-1, 2):
-            nz = cz + oz
-            if nz < 0 or nz >= ncz:
-                continue
-            for oy in range(-1, 2):
-                ny = cy + oy
-                if ny < 0 or ny >= ncy:
-                    continue
-                for ox in range(-1, 2):
-                    nx = cx + ox
-                    if nx < 0 or nx >= ncx:
-                        continue
-                    nc = (nz * ncy + ny) * ncx + nx
-                    for s in range(cell_start[nc], cell_start[nc + 1]):
-                        b = order[s]
-                        if b < first or b >= last:
-                            continue
-                        d0 = x[i, 0] - x[b, 0]
-                        d1 = x[i, 1] - x[b, 1]
-                        d2 = x[i, 2] - x[b, 2]
-                        r2 = d0 * d0 + d1 * d1 + d2 * d2
-                        if r2 < best_r2:
-                            best_r2 = r2
-                            best = b
-        if best < 0:
-            continue
-        k = src[best - first]
-        n0, n1, n2 = normal[k, 0], normal[k, 1], normal[k, 2]
-        d = ((x[i, 0] - foot[k, 0]) * n0 + (x[i, 1] - foot[k, 1]) * n1
-             + (x[i, 2] - foot[k, 2]) * n2)
-        if d < 0.0:
-            x[i, 0] -= 2.0 * d * n0
-            x[i, 1] -= 2.0 * d * n1
-            x[i, 2] -= 2.0 * d * n2
-            u[i, 0] -= 2.0 * d * n0
-            u[i, 1] -= 2.0 * d * n1
-            u[i, 2] -= 2.0 * d * n2
-            vn = v[i, 0] * n0 + v[i, 1] * n1 + v[i, 2] * n2
-            if vn < 0.0:
-                v[i, 0] -= vn * n0
-                v[i, 1] -= vn * n1
-                v[i, 2] -= vn * n2
-            moved += 1
-    return moved

@@ -36,7 +36,7 @@ from psph.kernels.boundary import (
     boundary_state,
     place_rows,
 )
-from psph.kernels.boundary_3d import boundary_contact_3d, boundary_state_3d
+from psph.kernels.boundary_3d import boundary_state_3d
 from psph.physics.softening import reach
 
 _MOTION = {"fixed": MOTION_FIXED, "slip": MOTION_SLIP, "friction": MOTION_FRICTION}
@@ -143,7 +143,6 @@ class BoundaryParticles:
     def contact(self, store, origin, cell_size, grid_lo, ncell, cell_start, order) -> int:
         """Put back owned particles found beyond a polyline (`boundary_contact`)."""
         st = store
-        contact = boundary_contact_3d if self.dim == 3 else boundary_contact
-        return contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
+        return boundary_contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
                                 self.normal, self.foot, origin, cell_size, grid_lo, ncell,
                                 cell_start, order, self.h)
