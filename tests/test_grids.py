@@ -53,6 +53,51 @@ def test_an_asc_grid_puts_its_first_row_north_and_is_bilinear(tmp_path):
     assert np.allclose(csv.z, g.z, rtol=0, atol=1e-6)  # the .asc holds 6 decimals
 
 
+def test_a_node_next_to_a_hole_keeps_its_elevation_and_csv_coordinates_are_snapped(
+        tmp_path):
+    """On a node or an edge a corner of weight 0 does not count: a DEM with a NODATA
+    margin still has data at its last nodes. CSV coordinates written with rounding noise
+    (0.30000000000000004 beside 0.3) are one grid line."""
+    z = np.array([[1.0, 2.0, -9999.0], [1.0, 2.0, -9999.0]])
+    g = read_grid(write_asc(tmp_path / "m.asc", 0.0, 0.0, 1.0, z, corner=False,
+                            nodata=-9999))
+    assert g.at(np.array([1.0, 0.5]), np.array([0.5, 1.0])).tolist() == [2.0, 1.5]
+    assert np.isnan(g.at(np.array([1.5]), np.array([0.5]))[0])
+    rows = ["0.0,0.0,1", "0.1,0.0,1", "0.30000000000000004,0.0,1", "0.2,0.0,1",
+            "0.0,1.0,2", "0.1,1.0,2", "0.3,1.0,2", "0.2,1.0,2"]
+    (tmp_path / "n.csv").write_text("\n".join(rows) + "\n")
+    g = read_grid(str(tmp_path / "n.csv"))
+    assert g.z.shape == (2, 4) and np.allclose(g.x, [0.0, 0.1, 0.2, 0.3])
+
+
+def test_sloped_layers_on_a_long_domain_hold_the_points_between_their_grids(tmp_path):
+    """Grids that slope in x and y on a domain longer in x than in y (an .asc and a CSV):
+    the seeded points are exactly the lattice points with bottom <= z <= top, counted
+    directly, and the census agrees."""
+    from psph.geometry.lattice import census, lattice_axes, seed
+
+    xs, ys = np.linspace(-0.1, 1.3, 8), np.linspace(-0.1, 0.5, 4)
+    gx, gy = np.meshgrid(xs, ys)
+    top = 0.8 + 0.1 * gx - 0.2 * gy
+    bottom = 0.1 + 0.05 * gx + 0.1 * gy
+    t = write_asc(tmp_path / "t.asc", -0.1, -0.1, 0.2, top, corner=False)
+    b = write_xyz(tmp_path / "b.csv", xs, ys, bottom)
+    scene = load_scene("terzaghi_3d", [
+        "domain.max=[1.2, 0.4, 1.0]", "particles.dx=0.05", "particles.blocks=[]",
+        f"particles.layers=[{{top='{t}', bottom='{b}'}}]", "loads=[]",
+        "verification.reference='none'", "time.end=0.01"])
+    x, key = seed(scene)
+    c = lattice_axes(scene.domain.min, scene.domain.max, 0.05)
+    zz, yy, xx = np.meshgrid(c[2], c[1], c[0], indexing="ij")
+    zt = 0.8 + 0.1 * xx - 0.2 * yy
+    zb = 0.1 + 0.05 * xx + 0.1 * yy
+    want = (zz >= zb - 1e-9) & (zz <= zt + 1e-9)
+    assert len(x) == want.sum() and np.array_equal(key, np.arange(len(x)))
+    assert np.all(x[:, 2] <= 0.8 + 0.1 * x[:, 0] - 0.2 * x[:, 1] + 1e-9)
+    assert np.all(x[:, 2] >= 0.1 + 0.05 * x[:, 0] + 0.1 * x[:, 1] - 1e-9)
+    assert census(scene, 0)[1].sum() == len(x)
+
+
 def test_nodata_cells_have_no_surface_and_no_triangles(tmp_path):
     z = np.zeros((3, 3))
     z[1, 1] = -9999.0
@@ -188,7 +233,7 @@ def test_a_bedrock_grid_lines_the_floor_as_inline_triangles_do(tmp_path):
 
 
 @pytest.mark.parametrize("case, words", [
-    ("hole", ["particles.layers[1].top", "ground.asc near row", "no data"]),
+    ("hole", ["particles.layers[1].top", "ground.asc at row 2, column 2", "no data"]),
     ("short", ["particles.layers[1].top", "ground.asc", "outside the grid", "cover"]),
     ("cross", ["particles.layers[0].bottom", "base.asc", "above the top", "cross"]),
     ("profile", ["particles.layers[1].top", "elevation grids"]),

@@ -84,14 +84,27 @@ def check_scene(scene):
     if scene.material is None:
         scene.material = mats[0]
     table = scene.initial.water_table
-    if dim == 3 and isinstance(table, str) and table != "surface":
+    if dim == 3 and isinstance(table, (int, float)):
+        if table < lo[2]:
+            raise _Rule("initial.water_table", table, f"below the domain's floor z = "
+                        f"{lo[2]:g} m")
+    elif dim == 3 and isinstance(table, str) and table != "surface":
+        if not Path(table).is_file():
+            raise _Rule("initial.water_table", table, "no such file")
         if not is_grid_file(table):
             raise _Rule("initial.water_table", table, "in 3D a water table is a level or an "
                         "elevation grid (an ESRI .asc file or an x, y, z CSV)")
-        axes = lattice_axes(lo, hi, scene.particles.dx)
-        gx, gy = (a.ravel() for a in np.meshgrid(axes[0], axes[1]))
+        if scene.verification.reference == "collapse":
+            raise _Rule("initial.water_table", table, "a level only with the plane-strain "
+                        "collapse metrics (verification.reference = 'collapse')")
+        dx = scene.particles.dx
+        # the columns of the domain's lattice and of every block's own
+        lattices = [lattice_axes(lo, hi, dx)] + [lattice_axes(b.min, b.max, dx)
+                                                 for b in scene.particles.blocks]
+        gx = np.concatenate([np.meshgrid(c[0], c[1])[0].ravel() for c in lattices])
+        gy = np.concatenate([np.meshgrid(c[0], c[1])[1].ravel() for c in lattices])
         try:
-            check_cover(read_grid(table), gx, gy, "the domain's lattice columns need a "
+            check_cover(read_grid(table), gx, gy, "the soil's lattice columns need a "
                         "water table")
         except GridError as e:
             raise _Rule(f"initial.water_table = {e.where}", e.value, e.rule) from None

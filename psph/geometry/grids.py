@@ -60,11 +60,34 @@ class ElevationGrid:
         ty = fy - j
         i1 = np.minimum(i + 1, len(self.x) - 1)
         j1 = np.minimum(j + 1, len(self.y) - 1)
-        z = ((1 - tx) * (1 - ty) * self.z[j, i] + tx * (1 - ty) * self.z[j, i1]
-             + (1 - tx) * ty * self.z[j1, i] + tx * ty * self.z[j1, i1])
+        z = np.zeros(np.broadcast(px, py).shape)
+        for wt, zc in (((1 - tx) * (1 - ty), self.z[j, i]), (tx * (1 - ty), self.z[j, i1]),
+                       ((1 - tx) * ty, self.z[j1, i]), (tx * ty, self.z[j1, i1])):
+            # a corner of weight 0 (a point on a node or an edge) does not count, with
+            # or without data
+            z += np.where(wt > 0.0, wt * np.where(np.isfinite(zc), zc, np.nan), 0.0)
         outside = ((px < self.x[0] - eps) | (px > self.x[-1] + eps)
                    | (py < self.y[0] - eps) | (py > self.y[-1] + eps))
         return np.where(outside, np.nan, z)
+
+    def missing_corner(self, px: float, py: float) -> tuple[float, float]:
+        """(x, y) of a node without data among those the surface at (px, py) takes."""
+        hx, hy = self.x[1] - self.x[0], self.y[1] - self.y[0]
+        i = int(np.clip(np.floor((px - self.x[0]) / hx), 0, len(self.x) - 2))
+        j = int(np.clip(np.floor((py - self.y[0]) / hy), 0, len(self.y) - 2))
+        for jj in (j, j + 1):
+            for ii in (i, i + 1):
+                if not np.isfinite(self.z[jj, ii]):
+                    return float(self.x[ii]), float(self.y[jj])
+        return float(px), float(py)
+
+    def where(self, px: float, py: float) -> str:
+        """A node of the grid as its file names it: an ESRI grid's row (from the north,
+        from 0) and column, a CSV's x and y."""
+        if Path(self.path).suffix.lower() != ".asc":
+            return f"x = {px:g}, y = {py:g}"
+        row, col = self.file_row_col(px, py)
+        return f"row {row}, column {col}"
 
     def file_row_col(self, px: float, py: float) -> tuple[int, int]:
         """The (row, column) of the node nearest (px, py) as the file counts them: an ESRI
@@ -173,8 +196,17 @@ def _read_xyz(name: str, text: str) -> ElevationGrid:
             raise GridError(f"{name} line {n}", line, "not three numbers x, y, z")
         rows.append(xyz)
     pts = np.array(rows, float).reshape(-1, 3)
-    xs, ix = np.unique(pts[:, 0], return_inverse=True)
-    ys, iy = np.unique(pts[:, 1], return_inverse=True)
+    axes, index = [], []
+    for axis in (0, 1):
+        c = pts[:, axis]
+        # coordinates as written (0.3 and 0.30000000000000004 are one): to 1e-9 of the span
+        tol = 1e-9 * max(np.ptp(c), 1.0)
+        u = np.unique(c)
+        keep = np.concatenate([[True], np.diff(u) > tol])
+        u = u[keep]
+        axes.append(u)
+        index.append(np.clip(np.searchsorted(u, c - tol), 0, len(u) - 1))
+    (xs, ys), (ix, iy) = axes, index
     if len(xs) < 2 or len(ys) < 2:
         raise GridError(name, len(pts), "a grid needs at least 2 distinct x and 2 distinct y")
     for axis, c in (("x", xs), ("y", ys)):
@@ -182,6 +214,10 @@ def _read_xyz(name: str, text: str) -> ElevationGrid:
         if np.ptp(step) > 1e-6 * step.mean():
             raise GridError(name, f"{axis} steps {step.min():g} to {step.max():g}",
                             f"the points' {axis} must be evenly spaced (a regular grid)")
+        if axis == "x":
+            xs = c[0] + step.mean() * np.arange(len(c))
+        else:
+            ys = c[0] + step.mean() * np.arange(len(c))
     z = np.full((len(ys), len(xs)), np.nan)
     seen = np.zeros(z.shape, np.int64)
     np.add.at(seen, (iy, ix), 1)
@@ -219,8 +255,8 @@ def check_cover(grid: ElevationGrid, px: np.ndarray, py: np.ndarray, what: str) 
         x, y = float(px[k]), float(py[k])
         inside = grid.x[0] <= x <= grid.x[-1] and grid.y[0] <= y <= grid.y[-1]
         if inside:
-            row, col = grid.file_row_col(x, y)
-            raise GridError(f"{grid.path} near row {row}, column {col}", f"x = {x:g}, y = {y:g}",
+            node = grid.where(*grid.missing_corner(x, y))
+            raise GridError(f"{grid.path} at {node}", f"x = {x:g}, y = {y:g}",
                             f"no data (NODATA or NaN) where {what}")
         raise GridError(grid.path, f"x = {x:g}, y = {y:g}",
                         f"outside the grid (x {grid.x[0]:g} to {grid.x[-1]:g}, y "
@@ -239,6 +275,8 @@ def check_layer_grids(layer, key: str, xs: np.ndarray, ys: np.ndarray
     grids, z = {}, {}
     for side in ("top", "bottom"):
         value = getattr(layer, side)
+        if isinstance(value, str) and not Path(value).is_file():
+            raise SceneRule(f"{key}.{side}", value, "no such file")
         if not is_grid_file(value):
             raise SceneRule(f"{key}.{side}", value if isinstance(value, str) else "inline",
                             "in 3D a layer's top and bottom are elevation grids (an ESRI "
@@ -253,8 +291,8 @@ def check_layer_grids(layer, key: str, xs: np.ndarray, ys: np.ndarray
     scale = max(np.ptp(z["top"]), np.ptp(z["bottom"]), 1.0)
     if np.any(gap < -1e-9 * scale):
         k = int(np.argmin(gap))
-        row, col = grids["bottom"].file_row_col(gx[k], gy[k])
-        raise SceneRule(f"{key}.bottom = {grids['bottom'].path} near row {row}, column {col}",
+        node = grids["bottom"].where(gx[k], gy[k])
+        raise SceneRule(f"{key}.bottom = {grids['bottom'].path} near {node}",
                         f"x = {gx[k]:g}, y = {gy[k]:g}",
                         f"above the top (by {-gap[k]:g} m): the surfaces cross")
     return grids["top"], grids["bottom"]

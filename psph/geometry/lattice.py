@@ -156,7 +156,7 @@ class Fill3D:
                              + [np.array([[xy[0], xy[2], zb.min()], [xy[1], xy[3], zt.max()]])
                                 for zt, zb in layer_z])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        eps = 1e-9 * max(np.abs(pts).max(), 1.0)
+        eps = 1e-9 * max(np.ptp(pts, axis=0).max(), 1.0)  # of the extent (UTM-sized x)
         self.idx = [np.flatnonzero((c >= lo[d] - eps) & (c <= hi[d] + eps))
                     for d, c in enumerate(axes)]
         self.axes = [c[i] for c, i in zip(axes, self.idx, strict=True)]
@@ -241,13 +241,15 @@ def estimate_count(scene) -> float:
             c, r, h = np.array(cy.base, float), cy.radius, cy.height
             boxes.append((c - [r, r, 0.0], c + [r, r, h]))
             volumes.append(inside(np.pi * r * r * h, *boxes[-1]))
-        if pa.layers:  # between elevation grids: their box over the domain's columns
-            fill3 = Fill3D(scene)
-            for zt, zb in ((t.at(*_columns(scene)), b.at(*_columns(scene)))
-                           for t, b in fill3.layers):
-                boxes.append((np.array([dom_lo[0], dom_lo[1], np.nanmin(zb)]),
-                              np.array([dom_hi[0], dom_hi[1], np.nanmax(zt)])))
-                volumes.append(float(np.nansum(zt - zb)) * dx * dx)
+        gx, gy = _columns(scene)  # layers between elevation grids: no lattice built
+        for il, layer in enumerate(pa.layers):
+            top, bottom = check_layer_grids(layer, f"particles.layers[{il}]",
+                                            *lattice_axes(dom_lo, dom_hi, dx)[:2])
+            zt = np.minimum(top.at(gx, gy), dom_hi[2])
+            zb = np.maximum(bottom.at(gx, gy), dom_lo[2])
+            boxes.append((np.array([dom_lo[0], dom_lo[1], zb.min()]),
+                          np.array([dom_hi[0], dom_hi[1], zt.max()])))
+            volumes.append(float(np.clip(zt - zb, 0.0, None).sum()) * dx * dx)
     if boxes:
         lo = np.min([b[0] for b in boxes], axis=0)
         hi = np.max([b[1] for b in boxes], axis=0)
