@@ -261,3 +261,20 @@ def test_bad_grids_exit_2_one_line_nothing_written(tmp_path, case, words):
     out = tmp_path / "out"
     r = run_cli("run", str(tmp_path / "grid_layers.toml"), "--out", str(out))
     assert_bad_input(r, words, out)
+
+
+def test_data_files_beside_the_scene_are_found_from_anywhere(tmp_path, monkeypatch):
+    """Grids named relative to the scene file are found when the run starts elsewhere
+    (and stay as written when found from the working directory)."""
+    scene_dir = tmp_path / "site"
+    scene_dir.mkdir()
+    _layered_scene(scene_dir)
+    text = (scene_dir / "grid_layers.toml").read_text().replace(str(scene_dir) + "/", "")
+    (scene_dir / "grid_layers.toml").write_text(text)
+    assert '"ground.asc"' in text
+    monkeypatch.chdir(tmp_path)
+    scene = load_scene(str(scene_dir / "grid_layers.toml"))
+    assert scene.particles.layers[1].top == str(scene_dir / "ground.asc")
+    assert scene.initial.water_table == str(scene_dir / "table.asc")
+    monkeypatch.chdir(scene_dir)
+    assert load_scene("grid_layers.toml").particles.layers[1].top == "ground.asc"

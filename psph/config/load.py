@@ -122,8 +122,43 @@ def load_scene(source: str, overrides: list[str] | None = None) -> Scene:
     data = parse_toml(text, label)
     for ov in overrides or []:
         apply_override(data, ov)
+    find_data_files(data, Path(label).parent)
     scene = validate(data, label)
     return resolve(scene)
+
+
+def _file_keys(data: dict):
+    """(table, key) of every value of a scene that may name a data file: meshes,
+    profiles and grids of layers, polylines' points, surfaces' meshes and grids, a water
+    table."""
+    pa = data.get("particles", {})
+    for mesh in pa.get("meshes", []) if isinstance(pa, dict) else []:
+        yield mesh, "file"
+    for layer in pa.get("layers", []) if isinstance(pa, dict) else []:
+        yield layer, "top"
+        yield layer, "bottom"
+    b = data.get("boundaries", {})
+    for line in b.get("polylines", []) if isinstance(b, dict) else []:
+        yield line, "points"
+    for surface in b.get("surfaces", []) if isinstance(b, dict) else []:
+        yield surface, "mesh"
+        yield surface, "grid"
+    yield data.get("initial", {}), "water_table"
+
+
+def find_data_files(data: dict, scene_dir: Path) -> None:
+    """A relative data file (`_file_keys`) that is not found from the working directory
+    but is beside the scene file is named by its absolute path there: a scene and its
+    grids, profiles and meshes can be run from anywhere, and a built-in scene can ship
+    its data in psph/scenes. Found from the working directory, a path stays as it is."""
+    for table, key in _file_keys(data):
+        if not isinstance(table, dict):
+            continue
+        value = table.get(key)
+        if not isinstance(value, str) or value == "surface" or Path(value).is_absolute():
+            continue
+        if not Path(value).exists() and (scene_dir / value).is_file():
+            table[key] = str((scene_dir / value).resolve())
 
 
 def resolve(scene: Scene) -> Scene:
