@@ -128,7 +128,8 @@ def test_collapse_3d_with_nonlocal_strain_one_vs_two_ranks_bitwise(tmp_path_fact
         "particles.dx=0.1", "time.end=0.15", "output.interval=0.05",
         "material.plasticity.eta=5.0", "material.plasticity.c=5e3",
         "material.plasticity.c_r=1e3",
-        "material.plasticity.regularisation={kind='nonlocal', length=0.15, m=2.0}"])
+        "material.plasticity.regularisation={kind='nonlocal', length=0.15, m=2.0}",
+        "boundaries.surfaces=[]", "boundaries.bottom={motion='fixed'}"])
     _one_vs_two(comm, scene, out, ("eps_p",))
     if comm.Get_rank() == 0:
         last = read_snapshots(out / "one" / "particles.h5")[-1]
@@ -137,18 +138,17 @@ def test_collapse_3d_with_nonlocal_strain_one_vs_two_ranks_bitwise(tmp_path_fact
 
 @pytest.mark.mpi(min_size=2)
 def test_collapse_3d_on_a_surface_floor_one_vs_two_ranks_bitwise(tmp_path_factory):
-    """The dry quarter column (CI size) on a floor given as a surface lined with boundary
-    particles (`kernels/boundary_3d.py`, halo 4h): 1 and 2 ranks, every field the same
-    bits."""
+    """The dry quarter column (CI size) on its floor, a surface lined with boundary
+    particles (`kernels/boundary_3d.py`, halo 4h) with Coulomb friction and the friction
+    of the touching particles' weight (`boundary_contact`): 1 and 2 ranks, every field
+    the same bits."""
     from mpi4py import MPI
-
-    from tests.test_surfaces import FLOOR_SURFACE
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)
     scene = load_scene("collapse_3d", [
-        "particles.dx=0.1", "time.end=0.15", "output.interval=0.05",
-        "boundaries.bottom={motion='free'}", FLOOR_SURFACE.replace("2.0", "5.0")])
+        "particles.dx=0.1", "time.end=0.15", "output.interval=0.05"])
+    assert scene.boundaries.surfaces[0].weight_friction
     _one_vs_two(comm, scene, out, ())
     if comm.Get_rank() == 0:
         last = read_snapshots(out / "one" / "particles.h5")[-1]

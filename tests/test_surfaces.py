@@ -200,6 +200,9 @@ def test_a_side_wall_continues_no_weight_and_a_drained_one_mirrors_p():
      ["boundaries.surfaces[0].vertices", "finite"]),
     ("{vertices=[[0,0,0],[1,0,0],[0,1,0]], triangles=[[0,1,2]], soil='above', "
      "motion='friction'}", ["boundaries.surfaces[0].friction_angle", "required"]),
+    ("{vertices=[[0,0,0],[1,0,0],[0,1,0]], triangles=[[0,1,2]], soil='above', "
+     "weight_friction=true}", ["boundaries.surfaces[0].weight_friction", "only with motion",
+                               "'fixed'"]),
 ])
 def test_bad_surfaces_exit_2_one_line_nothing_written(tmp_path, surface, words):
     out = tmp_path / "out"

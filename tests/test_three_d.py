@@ -266,16 +266,21 @@ def test_radial_collapse_metrics_and_lube_law():
     assert lube_runout(0.5) == pytest.approx(0.62) and lube_runout(4.0) == pytest.approx(3.2)
 
 
-def test_collapse_3d_quarter_column_spreads(tmp_path):
-    """The quarter cylinder of `collapse_3d` (CI size: dx = 0.1 m, 0.3 s): it spreads
+def test_collapse_3d_quarter_column_spreads_and_stops(tmp_path):
+    """The quarter cylinder of `collapse_3d` (CI size: dx = 0.1 m, 1 s): it spreads
     radially and sinks, every particle stays on the floor's side and inside the
-    quarter, and summary.json carries Lube et al.'s comparison."""
-    scene = load_scene("collapse_3d", ["particles.dx=0.1", "time.end=0.3",
-                                       "output.interval=0.1"])
+    quarter, summary.json carries Lube et al.'s comparison, and its front stops: the
+    run-out radius grows by less than 0.1 m over the last 0.25 s (0.06 m; without the
+    floor's `weight_friction` a film at the Drucker-Prager apex runs on, 0.40 m, to
+    1.17 r_i at 1 s: docs/vv/collapse_3d.md)."""
+    scene = load_scene("collapse_3d", ["particles.dx=0.1", "time.end=1.0",
+                                       "output.interval=0.25"])
     s = run(scene, tmp_path / "out", quiet=True)
     c = s["errors"]["collapse_3d"]
     assert c["aspect_ratio"] == 0.5 and c["lube_runout_normalised"] == pytest.approx(0.62)
     assert c["runout_normalised"] > 0.05 and c["final_height_m"] < 0.5
+    radius = c["series"]["runout_radius_m"]
+    assert len(radius) == 5 and radius[-1] - radius[-2] < 0.1, radius
     from psph.io.snapshots import read_snapshots
 
     last = read_snapshots(tmp_path / "out" / "particles.h5")[-1]

@@ -51,6 +51,12 @@ class _RigidWall(_Model):
         "with motion = \"friction\" [deg]")
     drained: bool = Field(False, description="true holds p = 0 on the wall; false is "
                           "impermeable")
+    # docs/vv/collapse_3d.md: a layer one particle thick at the Drucker-Prager apex has no
+    # stress for the wall's Coulomb traction to act on, and slides on as a film
+    weight_friction: bool = Field(
+        False, description="true: a soil particle within dx of the wall also loses, each "
+        "step, up to tan(φ_b) g_n Δt of its velocity along the wall (the Coulomb friction of "
+        "its own weight, g_n the body force into the wall); needs motion = \"friction\"")
 
 
 class Polyline(_RigidWall):
@@ -218,6 +224,9 @@ class Boundaries(_Model):
                                     "must be in [0, 90) degrees")
             elif phi is not None:
                 raise SceneRule(f"{key}.friction_angle", phi,
+                                f"only with motion = 'friction' (motion is '{line.motion}')")
+            if line.weight_friction and line.motion != "friction":
+                raise SceneRule(f"{key}.weight_friction", True,
                                 f"only with motion = 'friction' (motion is '{line.motion}')")
         return self
 

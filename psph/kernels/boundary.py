@@ -182,12 +182,17 @@ def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x,
 
 @nb.njit(cache=True)
 def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
-                     grid_lo, ncell, cell_start, order, h):
+                     grid_lo, ncell, cell_start, order, h, weight_dv, reach):
     """No penetration (safety net): an owned particle found on the wall side of the line
     (in 3D the tangent plane) of its nearest boundary particle (within 2h, in the cell
     lists of this step) is reflected back across it, (x - foot) . n -> -(x - foot) . n,
     and loses its velocity into the wall, as `ghosts.wall_contact` does for planes. 2D
-    or 3D by x (the 2D arithmetic in its own order). Returns the number moved."""
+    or 3D by x (the 2D arithmetic in its own order). Returns the number moved.
+
+    The Coulomb friction of a particle's weight (`weight_friction` walls): a particle
+    within `reach` of that plane (after the reflection) loses min(|v_t|, weight_dv[k]) of
+    its tangential velocity v_t = v - (v . n) n, with weight_dv[k] = tan(phi_b) g_n dt of
+    its boundary particle k (0: no such friction)."""
     three = x.shape[1] == 3
     ncx = ncell[0]
     ncy = ncell[1]
@@ -244,7 +249,29 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
                 for q in range(x.shape[1]):
                     v[i, q] -= vn * normal[k, q]
             moved += 1
+            d = -d
+        if weight_dv[k] > 0.0 and d < reach:
+            _coulomb_weight(v, i, normal, k, weight_dv[k])
     return moved
+
+
+@nb.njit(cache=True, inline="always")
+def _coulomb_weight(v, i, normal, k, dv):
+    """v_t of row i reduced by min(|v_t|, dv) along itself (`boundary_contact`)."""
+    dim = v.shape[1]
+    vn = 0.0
+    for q in range(dim):
+        vn += v[i, q] * normal[k, q]
+    vt2 = 0.0
+    for q in range(dim):
+        vt = v[i, q] - vn * normal[k, q]
+        vt2 += vt * vt
+    if vt2 == 0.0:
+        return
+    vt = math.sqrt(vt2)
+    f = min(vt, dv) / vt
+    for q in range(dim):
+        v[i, q] -= f * (v[i, q] - vn * normal[k, q])
 
 
 @nb.njit(cache=True)

@@ -65,7 +65,7 @@ class BoundaryParticles:
         self.dim = scene.dim
         lo = np.array(scene.domain.min, float) - 2.0 * h
         hi = np.array(scene.domain.max, float) + 2.0 * h
-        xs, ns, fs, motion, tan_phi, drained = [], [], [], [], [], []
+        xs, ns, fs, motion, tan_phi, drained, weight = [], [], [], [], [], [], []
         walls = [(f"boundaries.polylines[{i}]", w)
                  for i, w in enumerate(scene.boundaries.polylines)]
         walls += [(f"boundaries.surfaces[{i}]", w)
@@ -89,12 +89,18 @@ class BoundaryParticles:
             phi = line.friction_angle or 0.0
             tan_phi.append(np.full(m, np.tan(np.radians(phi))))
             drained.append(np.full(m, line.drained, np.bool_))
+            weight.append(np.full(m, line.weight_friction, np.bool_))
         self.x = np.concatenate(xs)
         self.normal = np.concatenate(ns)
         self.foot = np.concatenate(fs)
         self.motion = np.concatenate(motion)
         self.tan_phi = np.concatenate(tan_phi)
         self.drained = np.concatenate(drained)
+        # tan(phi_b) g_n of the weight friction, g_n the body force into the wall
+        g_n = np.maximum(-(self.normal @ np.asarray(scene.gravity, float)), 0.0)
+        self.weight_friction = np.where(np.concatenate(weight), self.tan_phi * g_n, 0.0)
+        self.weight_dv = np.zeros_like(self.weight_friction)
+        self.reach = dx
         self.key = key_base + np.arange(len(self.x), dtype=float)
         self.cell_volume = dx ** self.dim
         self.h = h
@@ -140,9 +146,12 @@ class BoundaryParticles:
                        st.p_prev, st.poro, st.rho, st.perm, st.acc, head_b, cell_of,
                        cell_start, order, ncell, self.h)
 
-    def contact(self, store, origin, cell_size, grid_lo, ncell, cell_start, order) -> int:
-        """Put back owned particles found beyond a polyline (`boundary_contact`)."""
+    def contact(self, store, origin, cell_size, grid_lo, ncell, cell_start, order,
+                dt: float) -> int:
+        """Put back owned particles found beyond a polyline or surface, and the weight
+        friction of the particles touching a `weight_friction` wall (`boundary_contact`)."""
         st = store
+        np.multiply(self.weight_friction, dt, out=self.weight_dv)
         return boundary_contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
                                 self.normal, self.foot, origin, cell_size, grid_lo, ncell,
-                                cell_start, order, self.h)
+                                cell_start, order, self.h, self.weight_dv, self.reach)

@@ -252,8 +252,8 @@ class Stages:
             wall_contact(st.n_owned, st.x, st.v, st.u, self.wall_axis, self.wall_pos,
                          self.wall_sign)
         if self.wall_particles:
-            self.wall_particles.contact(st, self.origin, self.cell_size, self.grid_lo, self.ncell,
-                                   self.cell_start, self.order)
+            self.wall_particles.contact(st, self.origin, self.cell_size, self.grid_lo,
+                                        self.ncell, self.cell_start, self.order, self.dt)
 
     def _shift(self) -> None:
         """Particle shifting (`stabilisation.shifting`, psph/kernels/shifting.py) over the

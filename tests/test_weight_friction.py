@@ -1,0 +1,54 @@
+"""The Coulomb friction of a particle's own weight on a `weight_friction` wall
+(`kernels/boundary.boundary_contact`; issue 37, the film of `collapse_3d` at the
+Drucker-Prager apex, docs/vv/collapse_3d.md). In a run: `tests/test_three_d.py`,
+`test_collapse_3d_quarter_column_spreads_and_stops`."""
+
+import numpy as np
+
+from psph.kernels.boundary import boundary_contact
+from psph.kernels.neighbours import bin_particles, grid_bounds
+
+DX = 0.05
+H = 1.2 * DX
+
+
+def _contact(x, v, weight_dv):
+    """boundary_contact of particles x over a floor z = 0 lined with one boundary particle
+    dx/2 under each (normal +z)."""
+    n = len(x)
+    bx = x.copy()
+    bx[:, 2] = -0.5 * DX
+    allx = np.vstack([x, bx])
+    cell = 2 * H
+    origin = allx.min(axis=0) - 4 * cell
+    lo = np.zeros(3, np.int64)
+    ncell = np.zeros(3, np.int64)
+    grid_bounds(allx, 2 * n, origin, cell, np.full(3, 1 << 40, np.int64), lo, ncell)
+    nc = int(ncell.prod())
+    cell_start = np.zeros(nc + 1, np.int64)
+    order = np.zeros(2 * n, np.int64)
+    bin_particles(allx, np.arange(2 * n, dtype=float), 2 * n, origin, cell, lo, ncell,
+                  np.zeros(2 * n, np.int64), cell_start, np.zeros(nc + 1, np.int64), order)
+    normal = np.tile([0.0, 0.0, 1.0], (n, 1))
+    foot = bx.copy()
+    foot[:, 2] = 0.0
+    vv = np.vstack([v, np.zeros_like(v)])
+    boundary_contact(n, allx, vv, np.zeros_like(allx), n, n, np.arange(n), normal, foot,
+                     origin, cell, lo, ncell, cell_start, order, H, np.full(n, weight_dv),
+                     DX)
+    return vv[:n]
+
+
+def test_the_tangential_velocity_loses_at_most_the_weights_friction():
+    """Within dx of the floor: |v_t| falls by min(|v_t|, dv) along itself, v_n is kept;
+    a particle higher up keeps its velocity."""
+    x = np.array([[0.0, 0.0, 0.025], [1.0, 0.0, 0.025], [2.0, 0.0, 0.049],
+                  [3.0, 0.0, 0.075]])
+    v = np.array([[3.0, 4.0, -0.5], [0.03, -0.04, 0.2], [0.0, 0.0, 1.0], [3.0, 4.0, 0.0]],
+                 float)
+    out = _contact(x, v, 0.1)
+    assert np.allclose(out[0], [3.0 * 0.98, 4.0 * 0.98, -0.5], rtol=0, atol=1e-15)
+    assert np.allclose(out[1], [0.0, 0.0, 0.2], rtol=0, atol=1e-15)  # stopped, not reversed
+    assert np.array_equal(out[2], v[2])  # no tangential velocity
+    assert np.array_equal(out[3], v[3])  # beyond dx
+    assert np.array_equal(_contact(x, v, 0.0), v)  # no weight friction: unchanged
