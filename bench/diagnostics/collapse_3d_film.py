@@ -39,6 +39,8 @@ def main(out: str) -> None:
         print(f"beyond 1.8 m: {film.sum()} of {len(r)}; on the floor's plane (z < 0.01 m): "
               f"{(film & (x[:, 2] < 0.01)).sum()}; moving faster than 0.3 m/s: "
               f"{(np.linalg.norm(v, axis=1) > 0.3).sum()}")
+        if not film.any():
+            return
         first = f["snapshots"][names[0]]
         born = np.isin(first["id"][:], ids[film])
         x0 = first["x"][:][born]

@@ -173,8 +173,9 @@ def fit(data: dict) -> dict:
     the 2-rank counts (per face, per halo particle), the network from the ping-pong."""
     runs = {(r["particles"], r["ranks"]): r for r in data["runs"]}
     net = next(r["network"] for r in data["runs"] if "network" in r)
-    c = sum(runs[n, 1]["seconds_per_step"] / n for n in N_CHECK) / len(N_CHECK)
-    two = [runs[n, 2] for n in N_CHECK]
+    sizes = sorted({r["particles"] for r in data["runs"]})
+    c = sum(runs[n, 1]["seconds_per_step"] / n for n in sizes) / len(sizes)
+    two = [runs[n, 2] for n in sizes]
     # one face per rank on 2 ranks: bytes per halo particle sent, messages, collectives
     bytes_per_halo = sum(max(r["bytes_per_step"]) / max(r["halo"]) for r in two) / len(two)
     messages = max(max(r["messages_per_step"]) for r in two)

@@ -1,0 +1,278 @@
+"""The scaling model of `scaling_model.py` in 3D (issue 38): slabs against two-axis cuts.
+
+Measured on this machine (`mpirun` workers of this script) on 1, 2 and 4 ranks of the
+throughput bench's 3D coupled elastic TPI block (`throughput.BLOCK_3D`, dx = 0.01 m,
+h = 1.3 dx, slabs along its long side z, so a slab face is the block's w x w section):
+a particle-step on one rank (c), the node share (s) and halo-row cost (c_h) of a 2-rank
+step, messages and bytes per face counted on the communicator, the network by ping-pong
+(`scaling_model.fit`, the same constants as in 2D, measured on the 3D step).
+
+The model of one step on P ranks, N particles, a halo of H_P particles per rank sent to
+and received from its n_P neighbours:
+
+    T(P) = c (1 + s) N / P + c_h H_P + n_P (m alpha + b (H_P / n_P) / beta)
+           + k ceil(log2 P) alpha_c
+
+- slabs along x (one face at P = 2, two beyond; n_P = 2): H_P = 2 r W H / dx^2, r = 3
+  halo rows (2h = 2.6 dx); a slab no thinner than its halo, P <= L / (r dx);
+- two-axis cuts, P = P_x P_y with P_x / P_y nearest to L / W (n_P = 8: four faces and
+  four edges): H_P = r H / dx (2 W / (P_y dx) + 2 L / (P_x dx)) + 4 r^2 H / dx, an inner
+  rank's.
+
+The field domain modelled: a hillslope block L x W x H = 8 : 4 : 1 (e.g. 160 x 80 x 20 m,
+`slope_3d`'s shape), N = 10^7 and 10^8 particles, on the cluster network of
+`scaling_model.CLUSTER` (stated assumptions). Two-axis decomposition is not in psph yet:
+its rows are the model's prediction only.
+
+    python bench/performance/scaling_model_3d.py              # measures (~3 min), models
+    python bench/performance/scaling_model_3d.py --model-only  # from the JSON
+
+Prints the tables, writes bench/out/scaling_model_3d.json and .png.
+"""
+
+import argparse
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tomllib
+from datetime import date
+from pathlib import Path
+
+from scaling import timed_windows
+from scaling_model import CLUSTER, CountingComm, fit, network
+from throughput import BLOCK_3D
+
+OUT = Path(__file__).resolve().parents[1] / "out"
+# block side w and height (m) at dx = 0.01: N = w^2 hgt 1e6; steps per timed window
+SIZES = {16_000: (0.2, 0.4, 10), 54_000: (0.3, 0.6, 4), 128_000: (0.4, 0.8, 2)}
+ROWS = 3  # ceil(2h / dx) at h = 1.3 dx
+DOMAIN = (8.0, 4.0, 1.0)  # L : W : H of the modelled hillslope block
+P_TABLE = (1, 2, 4, 16, 64, 256, 1024)
+
+
+def worker(n: int) -> None:
+    """One measurement under mpirun: step time, owned and halo rows, traffic per step."""
+    from mpi4py import MPI
+
+    from psph.app.run import make_slabs
+    from psph.config.load import resolve, validate
+    from psph.solver.simulation import Simulation
+
+    comm = MPI.COMM_WORLD
+    w, hgt, steps = SIZES[n]
+    scene = resolve(validate(tomllib.loads(BLOCK_3D.format(n=n, w=w, hgt=hgt))))
+    sim = Simulation(scene, make_slabs(scene, comm))
+    for _ in range(2):
+        sim.advance_one()
+    counting = CountingComm(sim.slabs.comm)
+    sim.slabs.comm = counting
+    windows = timed_windows(sim, comm, steps)
+    per = 3 * steps
+    lo, hi = scene.domain.min, scene.domain.max
+    across = [d for d in range(3) if d != sim.slabs.axis]
+    face = math.prod((hi[d] - lo[d]) / scene.particles.dx for d in across)
+    rec = {"particles": sim.n_global, "ranks": comm.Get_size(), "axis": sim.slabs.axis,
+           "seconds_per_step": min(windows) / steps,
+           "owned": comm.gather(sim.store.n_owned, root=0),
+           "halo": comm.gather(sim.store.n_halo, root=0),
+           "messages_per_step": comm.gather(counting.messages / per, root=0),
+           "bytes_per_step": comm.gather(counting.bytes / per, root=0),
+           "collectives_per_step": comm.gather(counting.collectives / per, root=0),
+           "face_particles": round(face)}
+    if comm.Get_size() == 2:
+        rec["network"] = network(comm)
+    if comm.Get_rank() == 0:
+        print(json.dumps(rec))
+
+
+def measure() -> dict:
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
+               OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1",
+               OMP_NUM_THREADS="1")
+    runs = []
+    for n in SIZES:
+        for r in (1, 2, 4):
+            cmd = ["mpirun", "-n", str(r), sys.executable, __file__, "--worker", str(n)]
+            res = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+            runs.append(json.loads(res.stdout.strip().splitlines()[-1]))
+            print(f"  measured N = {runs[-1]['particles']:,} on {r} rank(s): "
+                  f"{runs[-1]['seconds_per_step'] * 1e3:.1f} ms/step, halo "
+                  f"{max(runs[-1]['halo']):,} on the largest rank", flush=True)
+    return {"date": str(date.today()), "machine": platform.node(), "cpus": os.cpu_count(),
+            "runs": runs}
+
+
+def step_time(k: dict, net: dict, n: float, p: int, halo: float, neighbours: int,
+              cores: int = 10**9) -> float:
+    """Modelled seconds per step: N particles on P ranks, `halo` particles per rank
+    exchanged with `neighbours` ranks."""
+    if p == 1:
+        return k["c_s"] * n
+    compute = (k["c_s"] * (1.0 + k["node_share"]) * n / p + k["c_halo_s"] * halo) \
+        * max(1.0, p / cores)
+    traffic = neighbours * k["messages_per_face"] * net["alpha_s"] \
+        + k["bytes_per_halo_particle"] * halo / net["beta_Bps"]
+    return compute + traffic + k["collectives"] * math.ceil(math.log2(p)) * net["alpha_coll_s"]
+
+
+def slab_halo(p: int, w: float, h: float, dx: float) -> tuple[float, int]:
+    """(halo particles, neighbour ranks) of an inner slab (one face at P = 2)."""
+    if p == 1:
+        return 0.0, 0
+    faces = 1 if p == 2 else 2
+    return faces * ROWS * w * h / dx**2, faces
+
+
+def grid_split(p: int, length: float, width: float) -> tuple[int, int]:
+    """P_x x P_y = P with P_x / P_y nearest to L / W (on a log scale)."""
+    best = None
+    for py in range(1, p + 1):
+        if p % py:
+            continue
+        px = p // py
+        score = abs(math.log((px / py) / (length / width)))
+        if best is None or score < best[0]:
+            best = (score, px, py)
+    return best[1], best[2]
+
+
+def grid_halo(p: int, length: float, w: float, h: float, dx: float) -> tuple[float, int]:
+    """(halo particles, neighbour ranks) of an inner rank of the P_x x P_y cut."""
+    px, py = grid_split(p, length, w)
+    if p == 1:
+        return 0.0, 0
+    if py == 1:
+        return slab_halo(p, w, h, dx)
+    faces_x = 1 if px == 2 else 2 if px > 2 else 0
+    faces_y = 1 if py == 2 else 2
+    halo = ROWS * h / dx * (faces_x * w / py + faces_y * length / px) / dx \
+        + faces_x * faces_y * ROWS**2 * h / dx
+    return halo, faces_x + faces_y + faces_x * faces_y
+
+
+def check(data: dict, k: dict) -> list[dict]:
+    rows = []
+    for r in data["runs"]:
+        p, n = r["ranks"], r["particles"]
+        faces = 0 if p == 1 else 1 if p == 2 else 2
+        halo = faces * ROWS * r["face_particles"]
+        model = step_time(k, k["network"], n, p, halo, faces, data["cpus"])
+        rows.append({"particles": n, "ranks": p, "measured_ms": 1e3 * r["seconds_per_step"],
+                     "model_ms": 1e3 * model, "error": model / r["seconds_per_step"] - 1.0,
+                     "halo_measured": max(r["halo"]), "halo_model": halo})
+    return rows
+
+
+def projections(k: dict) -> dict:
+    out = {}
+    net = CLUSTER
+    for n in (1e7, 1e8):
+        volume = math.prod(DOMAIN)
+        scale = (n / volume) ** (1.0 / 3.0)  # particles per unit of the aspect box
+        dx = 1.0 / scale
+        length, width, height = DOMAIN
+        cap = int(length / (ROWS * dx))
+        t1 = step_time(k, net, n, 1, 0.0, 0)
+        rows = []
+        for p in P_TABLE:
+            row = {"ranks": p}
+            for name, (halo, nb) in (("slabs", slab_halo(p, width, height, dx)),
+                                     ("two_axis", grid_halo(p, length, width, height, dx))):
+                if name == "slabs" and p > cap:
+                    continue
+                t = step_time(k, net, n, p, halo, nb)
+                row[name] = {"ms_per_step": 1e3 * t, "efficiency": t1 / (p * t),
+                             "halo_over_owned": halo / (n / p), "neighbours": nb}
+            row["split"] = grid_split(p, length, width)
+            rows.append(row)
+        out[f"N = {n:.0e}"] = {"particles": n, "dx_over_H": dx / height,
+                               "slab_cap_ranks": cap, "strong": rows}
+    return out
+
+
+def report(data: dict) -> None:
+    k = fit(data)
+    data["fit"], data["check"], data["model"] = k, check(data, k), projections(k)
+    net = k["network"]
+    print(f"\nconstants (3D step): c = {k['c_s'] * 1e9:.0f} ns per particle-step, halo row "
+          f"{k['c_halo_s'] * 1e9:.0f} ns (fitted {k['c_halo_fit_s'] * 1e9:.0f}), "
+          f"{100 * k['node_share']:.1f} % slower on a shared node, "
+          f"{k['bytes_per_halo_particle']:.0f} B per halo particle, "
+          f"{k['messages_per_face']:.1f} messages per face, {k['collectives']:.2f} "
+          f"collectives per step; here alpha = {net['alpha_s'] * 1e6:.2f} us, beta = "
+          f"{net['beta_Bps'] / 1e9:.2f} GB/s")
+    print(f"\n{'N':>9} {'ranks':>5} {'measured ms':>12} {'model ms':>9} {'error':>7} "
+          f"{'halo meas.':>11} {'halo model':>11}")
+    for r in data["check"]:
+        print(f"{r['particles']:9,d} {r['ranks']:5d} {r['measured_ms']:12.1f} "
+              f"{r['model_ms']:9.1f} {100 * r['error']:6.1f}% {r['halo_measured']:11,d} "
+              f"{r['halo_model']:11,.0f}")
+    for name, m in data["model"].items():
+        print(f"\n{name}, L x W x H = {DOMAIN}, dx = {m['dx_over_H']:.4f} H, cluster "
+              f"network; slab cap {m['slab_cap_ranks']:,} ranks")
+        print(f"{'ranks':>6} {'slabs ms':>10} {'eff.':>6} {'halo/own':>9} "
+              f"{'P_x x P_y':>10} {'2-axis ms':>10} {'eff.':>6} {'halo/own':>9}")
+        for r in m["strong"]:
+            s, g = r.get("slabs"), r["two_axis"]
+            slab = (f"{s['ms_per_step']:10.1f} {100 * s['efficiency']:5.1f}% "
+                    f"{s['halo_over_owned']:9.3f}") if s else f"{'(cap)':>10} {'':6} {'':9}"
+            print(f"{r['ranks']:6d} {slab} {r['split'][0]:>4d} x {r['split'][1]:<3d} "
+                  f"{g['ms_per_step']:10.1f} {100 * g['efficiency']:5.1f}% "
+                  f"{g['halo_over_owned']:9.3f}")
+    (OUT / "scaling_model_3d.json").write_text(json.dumps(data, indent=2) + "\n")
+    plot(data)
+    print(f"wrote {OUT / 'scaling_model_3d.json'} and {OUT / 'scaling_model_3d.png'}")
+
+
+def plot(data: dict) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for name, m in data["model"].items():
+        rows = m["strong"]
+        for key, style in (("slabs", "s--"), ("two_axis", "o-")):
+            sel = [r for r in rows if key in r]
+            label = f"{name}, {key.replace('_', '-')}"
+            ax1.semilogx([r["ranks"] for r in sel], [100 * r[key]["efficiency"] for r in sel],
+                         style, label=label, base=2)
+            ax2.loglog([r["ranks"] for r in sel], [r[key]["halo_over_owned"] for r in sel],
+                       style, label=label, base=2)
+    ax1.set(xlabel="ranks", ylabel="parallel efficiency (%)", ylim=(0, 105),
+            title="strong scaling (model, cluster network)")
+    ax2.set(xlabel="ranks", ylabel="halo / owned particles", title="halo per rank")
+    for ax in (ax1, ax2):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"psph 3D, hillslope block L:W:H = {DOMAIN}, {data['date']}, "
+                 f"{data['machine']}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(OUT / "scaling_model_3d.png", dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--worker", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--model-only", action="store_true",
+                    help="refit and redraw from bench/out/scaling_model_3d.json")
+    args = ap.parse_args()
+    if args.worker:
+        worker(args.worker)
+        return
+    OUT.mkdir(exist_ok=True)
+    if args.model_only:
+        data = json.loads((OUT / "scaling_model_3d.json").read_text())
+    else:
+        data = measure()
+    report(data)
+
+
+if __name__ == "__main__":
+    main()
