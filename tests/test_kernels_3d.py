@@ -463,8 +463,8 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
                             np.full(count, 2000.0), k, z((count, 3)), z((count, 6)))
         sums = z((count, lay.NSUMS))
         rec = PairRecord(z((64 * count, 2), np.int64), z((64 * count, 3)))
-        got = pair_sums_3d(count, n, count, fields, sorted_cells(*cell_lists(pos, h), pos), par,
-                           sums, rec)
+        got = pair_sums_3d(count, n, count, fields,
+                           sorted_cells(*cell_lists(pos, h), pos, n_owned=n), par, sums, rec)
         return sums, rec, got
 
     sums, rec, m_pairs = sweep(x, p, perm)
@@ -480,6 +480,42 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
     assert near.sum() > 0
     assert np.allclose(sums[:n, darcy], both[:n, darcy], rtol=1e-10,
                        atol=1e-10 * np.abs(both[:n, darcy]).max())
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_sweep_skips_runs_without_owned_rows_to_the_same_bits(dim):
+    """`Cells.owned_before` lets a halo or ghost row skip the runs of its half stencil
+    that hold no owned row: the owned rows' sums and the recorded pairs are the bits of
+    the sweep that tests every candidate (all rows counted owned in owned_before)."""
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
+    from psph.kernels.interactions import pair_sums, pair_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    rng = np.random.default_rng(3)
+    n = 900 if dim == 3 else 400
+    x = rng.uniform(0.0, 1.0, (n, dim))
+    h = 0.09 if dim == 3 else 0.05
+    owned = 300 if dim == 3 else 150  # rows 0..owned-1, the rest halo and ghosts
+    order = np.argsort(x[:, 0], kind="stable")  # the owned rows at one end, as a slab
+    x = x[order]
+    z = np.zeros
+    nv = 6 if dim == 3 else 4
+    fields = PairFields(x, rng.normal(size=(n, dim)), rng.normal(size=(n, dim)),
+                        rng.normal(size=(n, nv)), rng.normal(size=n), rng.normal(size=n),
+                        np.full(n, 0.4), np.full(n, 1e-3), np.full(n, 2000.0),
+                        np.full(n, 1e-4), z((n, dim)), z((n, nv)))
+    par = PairParams(h, record=True).typed()
+    sweep = pair_sums_3d if dim == 3 else pair_sums
+    out = []
+    for counted in (owned, None):
+        sums = z((n, sum_layout(dim).NSUMS))
+        rec = PairRecord(z((64 * n, 2), np.int64), z((64 * n, dim)))
+        m = sweep(n, owned, n, fields, sorted_cells(*cell_lists(x, h), x, n_owned=counted),
+                  par, sums, rec)
+        out.append((sums[:owned], rec.pairs[:m], rec.pair_g[:m]))
+    assert len(out[0][1]) > 0
+    for a, b in zip(out[0], out[1], strict=True):
+        assert np.array_equal(a, b)
 
 
 def test_artificial_stress_in_3d_is_minus_epsilon_times_the_tensile_part():

@@ -32,19 +32,23 @@ class Cells(NamedTuple):
     """Cell list of `neighbours.bin_particles`: rows order[cell_start[c]:cell_start[c + 1]]
     lie in cell c of the ncell[0] x ncell[1] (x ncell[2]) grid; x_sorted[s] = x[order[s]],
     the positions in slot order, so the sweep's distance tests read memory in sequence
-    (`neighbours.gather_sorted`)."""
+    (`neighbours.gather_sorted`); owned_before[s] counts the owned rows in slots before s
+    (`neighbours.count_owned`), so that a sweep skips runs of slots without one."""
     cell_start: np.ndarray
     order: np.ndarray
     ncell: np.ndarray
     x_sorted: np.ndarray
+    owned_before: np.ndarray
 
 
 def sorted_cells(cell_start: np.ndarray, order: np.ndarray, ncell: np.ndarray,
-                 x: np.ndarray) -> Cells:
-    """`Cells` of a cell list and the positions it sorts (tests and drivers; the time loop
-    fills its own x_sorted)."""
+                 x: np.ndarray, n_owned: int | None = None) -> Cells:
+    """`Cells` of a cell list and the positions it sorts, rows below n_owned (default
+    all) owned (tests and drivers; the time loop fills its own x_sorted)."""
     n = int(cell_start[int(np.prod(ncell))])
-    return Cells(cell_start, order, ncell, np.ascontiguousarray(x[order[:n]]))
+    owned = order[:n] < (n if n_owned is None else n_owned)
+    before = np.concatenate([[0], np.cumsum(owned)]).astype(np.int64)
+    return Cells(cell_start, order, ncell, np.ascontiguousarray(x[order[:n]]), before)
 
 
 class PairRecord(NamedTuple):

@@ -98,7 +98,7 @@ def make_pair_sums(dim: int):
         v, v_slip, stress, p, p_prev = f.v, f.v_slip, f.stress, f.p, f.p_prev
         poro, vol, rho, perm, acc, astress = f.poro, f.vol, f.rho, f.perm, f.acc, f.astress
         cell_start, order, ncell = cells.cell_start, cells.order, cells.ncell
-        xs = cells.x_sorted
+        xs, owned_before = cells.x_sorted, cells.owned_before
         h, tpi_alpha, av_alpha, av_beta = par.h, par.tpi_alpha, par.av_alpha, par.av_beta
         c_sound, rho_l_b0, rho_l_b1 = par.c_sound, par.rho_l_b0, par.rho_l_b1
         rho_l_b2 = par.rho_l_b2
@@ -150,6 +150,9 @@ def make_pair_sums(dim: int):
                 for row in range(n_rows):
                     s0, s1 = forward_slots(row, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start,
                                            dim)
+                    # a halo or ghost row pairs only with owned ones: skip runs without
+                    if not own_a and owned_before[s1] == owned_before[s0]:
+                        continue
                     for sb in range(s0, s1):
                         b = order[sb]
                         own_b = b < n_owned

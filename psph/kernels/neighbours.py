@@ -135,6 +135,15 @@ def gather_sorted(x, order, n, out):
 
 
 @nb.njit(cache=True)
+def count_owned(order, n, n_owned, out):
+    """out[s] = how many of slots 0..s-1 hold owned rows (order[.] < n_owned), s <= n:
+    a run of slots [s0, s1) holds an owned row iff out[s1] > out[s0]."""
+    out[0] = 0
+    for s in range(n):
+        out[s + 1] = out[s] + (1 if order[s] < n_owned else 0)
+
+
+@nb.njit(cache=True)
 def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, fill, order):
     """Counting sort of particles 0..n-1 into cells, then insertion sort by key in a cell.
 

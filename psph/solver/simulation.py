@@ -126,6 +126,7 @@ class Simulation(Stages):
         self.cell_of = np.zeros(self.store.cap, np.int64)
         self.order = np.zeros(self.store.cap, np.int64)
         self.x_sorted = np.zeros((self.store.cap, dim))
+        self.owned_before = np.zeros(self.store.cap + 1, np.int64)  # `count_owned`
         lay = self.layout = sum_layout(dim)
         # the Darcy sums (Q .. SUM_APSI) and the stress divergence, scaled by the lattice
         # moment after the sweep (`Stages._interactions`)

@@ -20,7 +20,7 @@ from psph.kernels.bundles import (
 )
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import symmetric_gradient_sums
-from psph.kernels.neighbours import bin_particles, gather_sorted, grid_bounds
+from psph.kernels.neighbours import bin_particles, count_owned, gather_sorted, grid_bounds
 from psph.kernels.shifting import (
     FREE_TRACE,
     FREE_TRACE_3D,
@@ -188,7 +188,11 @@ class Stages:
         if self.x_sorted.shape[0] < n_slots:
             self.x_sorted = np.zeros((st.cap, self.dim))
         gather_sorted(st.x, self.order, n_slots, self.x_sorted)
-        cells = Cells(self.cell_start, self.order, self.ncell, self.x_sorted)
+        if self.owned_before.shape[0] < n_slots + 1:
+            self.owned_before = np.zeros(st.cap + 1, np.int64)
+        count_owned(self.order, n_slots, st.n_owned, self.owned_before)
+        cells = Cells(self.cell_start, self.order, self.ncell, self.x_sorted,
+                      self.owned_before)
         par = PairParams(self.h, alpha, sb.av_alpha, sb.av_beta, self.av_sound_speed,
                          rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
                          as_n, self.w_dx, self.p_weight, self.record_pairs,
