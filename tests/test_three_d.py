@@ -95,15 +95,16 @@ def small_column(tmp_path_factory):
     return out, run(load_scene("terzaghi_3d", SMALL), out, quiet=True)
 
 
-def test_terzaghi_3d_column_within_one_percent(small_column):
+def test_terzaghi_3d_column_within_half_a_percent(small_column):
     """The Section 4.1 column in 3D, laterally confined by four slip walls (CI size, dx =
-    0.02 m): max |p - p_a| / q within 1 % at T_v = 0.05 and 0.1 (the full column:
-    `mpirun -n 2 .venv/bin/python bench/verification/default_run.py --scene terzaghi_3d`)."""
+    0.02 m): max |p - p_a| / q within 0.5 % at T_v = 0.05 and 0.1 (0.26 and 0.14 %; the
+    issue asks 1 % of the CI column; with the global damping it was 0.39 and 0.29 %. The
+    full column: `mpirun -n 2 .venv/bin/python -m psph run terzaghi_3d`)."""
     _, summary = small_column
     errors = summary["errors"]["pressure"]
     assert set(errors) == {"0.05", "0.1"}
     for tv, e in errors.items():
-        assert e["max_abs_p_error_over_q"] < 0.01, (tv, e)
+        assert e["max_abs_p_error_over_q"] < 0.005, (tv, e)
     assert summary["pressure_solve"]["steps_not_converged"] == 0
 
 

@@ -13,30 +13,31 @@ H = 1.2 * DX
 
 
 def _contact(x, v, weight_dv):
-    """boundary_contact of particles x over a floor z = 0 lined with one boundary particle
-    dx/2 under each (normal +z)."""
-    n = len(x)
+    """boundary_contact of particles x (2D or 3D) over a floor (z = 0, y = 0 in 2D) lined
+    with one boundary particle dx/2 under each (normal up). Returns (x, v) after it."""
+    n, dim = x.shape
     bx = x.copy()
-    bx[:, 2] = -0.5 * DX
+    bx[:, -1] = -0.5 * DX
     allx = np.vstack([x, bx])
     cell = 2 * H
     origin = allx.min(axis=0) - 4 * cell
-    lo = np.zeros(3, np.int64)
-    ncell = np.zeros(3, np.int64)
-    grid_bounds(allx, 2 * n, origin, cell, np.full(3, 1 << 40, np.int64), lo, ncell)
+    lo = np.zeros(dim, np.int64)
+    ncell = np.zeros(dim, np.int64)
+    grid_bounds(allx, 2 * n, origin, cell, np.full(dim, 1 << 40, np.int64), lo, ncell)
     nc = int(ncell.prod())
     cell_start = np.zeros(nc + 1, np.int64)
     order = np.zeros(2 * n, np.int64)
     bin_particles(allx, np.arange(2 * n, dtype=float), 2 * n, origin, cell, lo, ncell,
                   np.zeros(2 * n, np.int64), cell_start, np.zeros(nc + 1, np.int64), order)
-    normal = np.tile([0.0, 0.0, 1.0], (n, 1))
+    normal = np.zeros((n, dim))
+    normal[:, -1] = 1.0
     foot = bx.copy()
-    foot[:, 2] = 0.0
+    foot[:, -1] = 0.0
     vv = np.vstack([v, np.zeros_like(v)])
     boundary_contact(n, allx, vv, np.zeros_like(allx), n, n, np.arange(n), normal, foot,
                      origin, cell, lo, ncell, cell_start, order, H, np.full(n, weight_dv),
                      DX)
-    return vv[:n]
+    return allx[:n], vv[:n]
 
 
 def test_the_tangential_velocity_loses_at_most_the_weights_friction():
@@ -46,9 +47,25 @@ def test_the_tangential_velocity_loses_at_most_the_weights_friction():
                   [3.0, 0.0, 0.075]])
     v = np.array([[3.0, 4.0, -0.5], [0.03, -0.04, 0.2], [0.0, 0.0, 1.0], [3.0, 4.0, 0.0]],
                  float)
-    out = _contact(x, v, 0.1)
+    _, out = _contact(x, v, 0.1)
     assert np.allclose(out[0], [3.0 * 0.98, 4.0 * 0.98, -0.5], rtol=0, atol=1e-15)
     assert np.allclose(out[1], [0.0, 0.0, 0.2], rtol=0, atol=1e-15)  # stopped, not reversed
     assert np.array_equal(out[2], v[2])  # no tangential velocity
     assert np.array_equal(out[3], v[3])  # beyond dx
-    assert np.array_equal(_contact(x, v, 0.0), v)  # no weight friction: unchanged
+    assert np.array_equal(_contact(x, v, 0.0)[1], v)  # no weight friction: unchanged
+
+
+def test_a_particle_put_back_above_the_wall_then_gets_the_friction():
+    """Found 0.01 m below the floor: reflected to 0.01 m above it, its velocity into the
+    wall removed, then (within dx) its tangential velocity reduced by dv."""
+    x, v = _contact(np.array([[0.0, 0.0, -0.01]]), np.array([[1.0, 0.0, -0.5]]), 0.1)
+    assert np.allclose(x[0], [0.0, 0.0, 0.01], rtol=0, atol=1e-15)
+    assert np.allclose(v[0], [0.9, 0.0, 0.0], rtol=0, atol=1e-15)
+
+
+def test_the_weight_friction_in_2d():
+    """The same rule on a 2D polyline's boundary particles (the kernel serves both)."""
+    x = np.array([[0.0, 0.025], [1.0, 0.025], [2.0, 0.075]])
+    v = np.array([[-0.3, -0.1], [0.05, 0.0], [0.3, 0.0]])
+    _, out = _contact(x, v, 0.1)
+    assert np.allclose(out, [[-0.2, -0.1], [0.0, 0.0], [0.3, 0.0]], rtol=0, atol=1e-15)

@@ -12,11 +12,12 @@ to T_v = 0.2 with the scene's eta_d = 0.02 and with eta_d = 0, and prints at T_v
 the error profile (p - p_a) / q against depth for both, and the share
 rho c_d int_0^H v dz / q that Terzaghi's settlement rate predicts at the base.
 
-    .venv/bin/python bench/diagnostics/damping_load_share.py       # ~1 min, one rank
+    .venv/bin/python bench/diagnostics/damping_load_share.py       # ~30 s, one rank
 
 Writes bench/out/damping_load_share.json.
 """
 
+import csv
 import json
 import platform
 import tempfile
@@ -33,16 +34,34 @@ from psph.verify import terzaghi
 
 OUT = Path(__file__).resolve().parents[1] / "out"
 TV = 0.1
+WINDOWS = ((0.01, 0.02), (0.02, 0.03), (0.03, 0.05), (0.05, 0.09))
 
 
 def error_profile(out: Path, scene) -> tuple[np.ndarray, np.ndarray]:
     """Depths of the lattice rows and the row-mean (p - p_a) / q at the snapshot of T_v."""
     ref = terzaghi.from_scene(scene)
     snap = min(read_snapshots(out / "particles.h5"), key=lambda s: abs(ref.tv_of(s["time"]) - TV))
-    depth = np.round(1.0 - (snap["x"][:, 1] - snap["u"][:, 1]), 6)
+    depth = np.round(ref.height - (snap["x"][:, 1] - snap["u"][:, 1]), 6)
     err = (snap["p"] - ref.pressure(depth, snap["time"])) / ref.load
     rows = np.unique(depth)
     return rows, np.array([err[depth == r].mean() for r in rows])
+
+
+def after_switch(out: Path, scene) -> list[dict]:
+    """The base probe's p / p0 range and the largest kinetic energy in windows after the
+    drained switch (history.csv)."""
+    ref = terzaghi.from_scene(scene)
+    rows = list(csv.DictReader(open(out / "history.csv")))
+    t = np.array([float(r["time"]) for r in rows])
+    p = np.array([float(r["p_base"]) for r in rows]) / ref.p0
+    ke = np.array([float(r["kinetic_energy"]) for r in rows])
+    out_rows = []
+    for a, b in WINDOWS:
+        m = (t >= a) & (t < b)
+        out_rows.append({"window_s": [a, b], "p_base_over_p0": [float(p[m].min()),
+                                                                float(p[m].max())],
+                         "kinetic_energy_max_J": float(ke[m].max())})
+    return out_rows
 
 
 def predicted_share(scene) -> float:
@@ -73,7 +92,8 @@ def main() -> None:
             result["runs"][str(eta)] = {
                 "max_abs_p_error_over_q": summary["errors"]["pressure"]["0.1"][
                     "max_abs_p_error_over_q"],
-                "depth_m": depth.tolist(), "row_error_over_q": err.tolist()}
+                "depth_m": depth.tolist(), "row_error_over_q": err.tolist(),
+                "after_switch": after_switch(out, scene)}
     result["predicted_share_at_base"] = predicted_share(scene)
     a, b = (np.array(result["runs"][k]["row_error_over_q"]) for k in ("0.02", "0.0"))
     result["damping_part_at_base"] = float(a[-1] - b[-1])
@@ -84,6 +104,12 @@ def main() -> None:
         print(f"{depth[i]:8.3f} {100 * a[i]:+11.3f} {100 * b[i]:+9.3f} {d:+11.3f}")
     for k, r in result["runs"].items():
         print(f"eta_d = {k}: max |p - p_a| / q = {100 * r['max_abs_p_error_over_q']:.3f} %")
+    print("after the drained switch: base p / p0 (min, max), largest kinetic energy (J)")
+    for k, r in result["runs"].items():
+        for w in r["after_switch"]:
+            lo, hi = w["p_base_over_p0"]
+            print(f"  eta_d = {k:4s} t = {w['window_s'][0]:.2f}-{w['window_s'][1]:.2f} s: "
+                  f"{lo:.4f} .. {hi:.4f}, {w['kinetic_energy_max_J']:.3g}")
     print(f"damping's part at the base {100 * result['damping_part_at_base']:+.3f} % of q; "
           f"rho c_d int v dz / q = {100 * result['predicted_share_at_base']:.3f} %")
     OUT.mkdir(exist_ok=True)

@@ -24,7 +24,7 @@ The field domain modelled: a hillslope block L x W x H = 8 : 4 : 1 (e.g. 160 x 8
 `scaling_model.CLUSTER` (stated assumptions). Two-axis decomposition is not in psph yet:
 its rows are the model's prediction only.
 
-    python bench/performance/scaling_model_3d.py              # measures (~3 min), models
+    python bench/performance/scaling_model_3d.py              # measures (~40 s), models
     python bench/performance/scaling_model_3d.py --model-only  # from the JSON
 
 Prints the tables, writes bench/out/scaling_model_3d.json and .png.

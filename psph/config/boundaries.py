@@ -68,7 +68,9 @@ class Polyline(_RigidWall):
     (the pore pressure of the boundary particles is antisymmetric); else impermeable.
     rows: "line" (rows (k + 1/2) dx from the line, `polylines.boundary_particles`) or
     "lattice" (on the soil's lattice, dx from its lowest row in every column,
-    `polylines.lattice_particles`: for seeded soil at rest on a gently dipping line)."""
+    `polylines.lattice_particles`: for seeded soil at rest on a gently dipping line).
+    weight_friction (with motion = "friction"): the soil particles within dx of the wall
+    also get the Coulomb friction of their own weight (`kernels/boundary.boundary_contact`)."""
 
     points: list[list[float]] | str = Field(
         description="Points [[x, z], ...] or a CSV path: a profile increasing in x, or a "
@@ -87,7 +89,7 @@ class Surface(_RigidWall):
     reads (STL, OBJ, PLY, VTK, ...; its triangles and quads), an elevation grid (two
     triangles a cell, `geometry/grids.py`), or vertices and triangles inline. soil:
     "above" / "below" a surface z(x, y), or "outside" / "inside" a closed one. motion,
-    friction_angle and drained as on a polyline."""
+    friction_angle, weight_friction and drained as on a polyline."""
 
     mesh: str | None = Field(None, description="Path of a surface mesh file meshio reads "
                              "(triangles, quads); or give grid, or vertices and triangles")

@@ -132,7 +132,8 @@ class Simulation(Stages):
         # moment after the sweep (`Stages._interactions`)
         self.darcy_columns = slice(lay.Q, lay.SUM_APSI + 1)
         self.dvdt_columns = slice(lay.DVDT, lay.DVDT + dim)
-        self.sums = np.zeros((self.store.cap, lay.NSUMS))
+        # the pair sums of owned rows (halo and ghost rows get none): sized by `_neighbours`
+        self.sums = np.zeros((0, lay.NSUMS))
         self.astress = np.zeros((1, 3 if dim == 2 else 6))
         self.w_dx = w_cubic(scene.particles.dx, self.h) if dim == 2 else \
             w_cubic_dim(scene.particles.dx, self.h, dim)

@@ -118,7 +118,8 @@ class Stages:
         if self.cell_of.shape[0] < st.cap:
             self.cell_of = np.zeros(st.cap, np.int64)
             self.order = np.zeros(st.cap, np.int64)
-            self.sums = np.zeros((st.cap, self.layout.NSUMS))
+        if self.sums.shape[0] < st.n_owned:  # every kernel writes and reads owned rows only
+            self.sums = np.zeros((st.n_owned + st.n_owned // 8 + 64, self.layout.NSUMS))
         grid_bounds(st.x, n, self.origin, self.cell_size, self.cell_max, self.grid_lo,
                     self.ncell)
         nc = int(np.prod(self.ncell))
