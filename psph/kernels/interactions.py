@@ -92,8 +92,8 @@ def make_pair_sums(dim: int):
         as written), 0 leaves it out for `update.pore_pressure_force` to add it as a
         corrected gradient; record writes the visited pairs (a, b) and grad_a W_ab to
         rec (`bundles.PairRecord`) in visiting order, for `velocity_gradient_sums`.
-        Returns the number of pairs recorded, or -1 if rec.pairs is too short (the sums are
-        complete either way).
+        Returns the number of pairs recorded, or minus the number of pairs if rec.pairs is
+        too short for them (the sums are complete either way).
         """
         v, v_slip, stress, p, p_prev = f.v, f.v_slip, f.stress, f.p, f.p_prev
         poro, vol, rho, perm, acc, astress = f.poro, f.vol, f.rho, f.perm, f.acc, f.astress
@@ -290,7 +290,7 @@ def make_pair_sums(dim: int):
                                 add_outer(sums, b, cga, dim, va, ka0, ka1, ka2, g0, g1, g2)
         if dim == 3:
             mirror_moment(sums, n_owned, cm)
-        return n_pairs if n_pairs <= cap_pairs else -1
+        return n_pairs if n_pairs <= cap_pairs else -n_pairs
 
     return pair_sums
 

@@ -172,9 +172,10 @@ class Simulation(Stages):
         # (and by the mass-balance residual of the explicit and TPI pressure)
         self.shifting = scene.stabilisation.shifting
         self.record_pairs = self.symplectic or self.coupled or self.shifting > 0.0
-        n_pairs0 = 16 * self.store.cap if self.record_pairs else 0
-        self.pairs = np.zeros((n_pairs0, 2), np.int64)
-        self.pair_g = np.zeros((n_pairs0, dim))
+        # row indices of this rank's store; sized by the first sweep that records them
+        # (`Stages._interactions`: the step's pairs and an eighth more)
+        self.pairs = np.zeros((0, 2), np.int32)
+        self.pair_g = np.zeros((0, dim))
         self.n_pairs = 0
         self.dt, self.scheme = self.stepping.at(0.0)
         self.bad_particle = -1

@@ -218,8 +218,8 @@ class Stages:
                                         self.scene.pressure.momentum == "gradient",
                                         self.lattice_norm, 1.0 - self.p_weight)
                 return
-            grow = 2 * self.pairs.shape[0]
-            self.pairs = np.zeros((grow, 2), np.int64)
+            grow = -n + (-n) // 8 + 1024  # this step's pairs and an eighth more
+            self.pairs = np.zeros((grow, 2), np.int32)
             self.pair_g = np.zeros((grow, self.dim))
 
     def _kick(self) -> None:
