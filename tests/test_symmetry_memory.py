@@ -229,7 +229,7 @@ def test_a_scene_too_large_for_memory_is_exit_2_before_anything_is_allocated(tmp
     r = subprocess.run([sys.executable, "-c", code, "run", str(f), "--out", str(out)],
                        capture_output=True, text=True, timeout=120)
     assert_bad_input(r, ["particles.dx = 0.0002", "about 8.11e+10 particles", "estimate",
-                         "1700 B each", "dry", "GiB a rank on 1 rank(s)", "GiB the node has "
+                         "1000 B each", "dry", "GiB a rank on 1 rank(s)", "GiB the node has "
                          "available (MemAvailable)"], out)
     assert int(r.stdout.split()[-1]) * 1024 < 1024 ** 3  # ru_maxrss in KiB
 

@@ -7,15 +7,17 @@ from psph.geometry.lattice import estimate_count
 
 # Bytes a particle at least, by (dim, coupled): the running state per owned particle
 # (`Simulation.state_bytes`: the particle store, scratch, neighbour and pair lists)
-# measured by `make bench` on 2026-12-05 (docs/performance.md, "3D rows", with the
-# sorted positions of the pair sweep): the coupled elastic TPI step 2,104-2,115 B in 2D
-# and 4,238-4,263 B in 3D, the dry 3D collapse 1,773 B; a dry 2D scene's whole peak
-# 695 B (the 9.9M-particle collapse at 6.39 GiB on one rank, "Ten million particles").
-# Rounded down: the peak resident memory is above the state (the interpreter, numba and
-# MPI, about 190 MB a rank; the snapshot and checkpoint writes), so the check refuses
-# only what clearly cannot run.
-STATE_BYTES_PER_PARTICLE = {(2, True): 2_100, (2, False): 650, (3, True): 4_200,
-                            (3, False): 1_700}
+# measured by `make bench` on 2026-12-05 after the pair sums were sized by the owned
+# rows, the pair lists by the step's pairs (int32) and the store by the owned particles
+# and a quarter (docs/performance.md, "Memory per particle"): the coupled elastic TPI
+# step 929-945 B in 2D and 2,772-3,277 B in 3D, the dry 3D collapse 1,063-1,344 B; a dry
+# 2D scene's whole peak 695 B before them (the 9.9M-particle collapse at 6.39 GiB on one
+# rank, "Ten million particles"; its state is now 688 B at 80,000 particles). Rounded
+# down: the peak resident memory is above the state (the interpreter, numba and MPI,
+# about 190 MB a rank; the snapshot and checkpoint writes; the projection's per-pair
+# weights), so the check refuses only what clearly cannot run.
+STATE_BYTES_PER_PARTICLE = {(2, True): 900, (2, False): 650, (3, True): 2_700,
+                            (3, False): 1_000}
 
 GIB = 1024.0 ** 3
 

@@ -275,6 +275,33 @@ def _coulomb_weight(v, i, normal, k, dv):
 
 
 @nb.njit(cache=True)
+def near_box(bx, candidates, x, n_real, margin, bbox, out):
+    """out[:m] = the candidates k (in their order) whose bx[k] lies within `margin` of
+    the bounding box of x[:n_real] (kept in bbox, (2, dim)); returns m (0 without rows)."""
+    dim = x.shape[1]
+    if n_real == 0:
+        return 0
+    for d in range(dim):
+        bbox[0, d] = x[0, d]
+        bbox[1, d] = x[0, d]
+    for i in range(1, n_real):
+        for d in range(dim):
+            bbox[0, d] = min(bbox[0, d], x[i, d])
+            bbox[1, d] = max(bbox[1, d], x[i, d])
+    m = 0
+    for r in range(candidates.shape[0]):
+        k = candidates[r]
+        inside = True
+        for d in range(dim):
+            if bx[k, d] < bbox[0, d] - margin or bx[k, d] > bbox[1, d] + margin:
+                inside = False
+        if inside:
+            out[m] = k
+            m += 1
+    return m
+
+
+@nb.njit(cache=True)
 def place_rows(first, n_b, src, bx, bkey, cell_volume, x, key, vol):
     """Positions, sort keys and volumes (dx^dim) of the selected boundary particles src
     at rows first.. of the store (2D or 3D by bx)."""

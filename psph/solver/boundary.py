@@ -34,6 +34,7 @@ from psph.kernels.boundary import (
     MOTION_SLIP,
     boundary_contact,
     boundary_state,
+    near_box,
     place_rows,
 )
 from psph.kernels.boundary_3d import boundary_state_3d
@@ -105,7 +106,9 @@ class BoundaryParticles:
         self.cell_volume = dx ** self.dim
         self.h = h
         self.width = halo_width(scene)
+        self._slab_src = np.zeros(0, np.int64)
         self.src = np.zeros(0, np.int64)
+        self._bbox = np.zeros((2, self.dim))
         self._slab = None
         self.first = 0
         self.n = 0
@@ -114,14 +117,18 @@ class BoundaryParticles:
         """The boundary particles within [lo - 4h, hi + 4h] along the slab axis."""
         if self._slab != (axis, lo, hi):
             c = self.x[:, axis]
-            self.src = np.flatnonzero((c >= lo - self.width) & (c <= hi + self.width))
+            self._slab_src = np.flatnonzero((c >= lo - self.width) & (c <= hi + self.width))
+            self.src = np.zeros(len(self._slab_src), np.int64)
             self._slab = (axis, lo, hi)
 
     def append(self, store) -> bool:
         """Append the selected boundary particles' rows after the ghosts (x, key, volume;
         the rest comes from `state`). False if the store had to grow first (its arrays
-        moved: the caller rebuilds the ghosts and appends again)."""
-        nb = len(self.src)
+        moved: the caller rebuilds the ghosts and appends again). Only those within 2h of
+        the box around the soil rows (owned and halo) are appended: the others interact with
+        no soil this step, so leaving them out changes no sum."""
+        nb = near_box(self.x, self._slab_src, store.x, store.n_real, 2.0 * self.h,
+                      self._bbox, self.src)
         if store.ensure(store.n_total + nb + 64):
             return False
         self.first = store.n_total

@@ -83,7 +83,9 @@ class Simulation(Stages):
         self.removals_done = removals_done
         # the recycled guess's basis (psph/solver/recycling.py): projection runs only
         self.recycle = recycle
-        self.store = ParticleStore(2 * n_local + 256, dim, self.recycle)
+        # rows for the owned particles and a quarter more for halo and wall ghosts; the
+        # store grows by half when a step needs more (`ParticleStore.ensure`)
+        self.store = ParticleStore(n_local + n_local // 4 + 256, dim, self.recycle)
         self.store.load(data)
         if fresh:
             self.store.u[:] = 0.0

@@ -90,7 +90,7 @@ class Stages:
             if ng >= 0:
                 st.n_ghost = ng
                 return
-            st.ensure(2 * st.cap)
+            st.ensure(st.cap + st.cap // 2)
 
     def _boundary_rows(self) -> None:
         """Rows of the boundary particles near this slab, after the ghosts."""

@@ -134,7 +134,7 @@ class ParticleStore:
         """Set the owned particles from full arrays (missing fields stay zero)."""
         n = len(next(iter(data.values())))
         self.n_halo = self.n_ghost = 0
-        self.ensure(2 * n + 64)
+        self.ensure(n + n // 4 + 64)
         self.n_owned = n
         for name, a in data.items():
             self.arrays[name][:n] = a
