@@ -82,12 +82,14 @@ def mpirun(label: str, ranks: int, out: Path, *settings: str, restart: bool = Fa
     return row
 
 
-def measure(dx: float) -> list[dict]:
+def measure(dx: float, setup_only: bool = False) -> list[dict]:
     dt = solid_dt(dx)
     end = STEPS * dt * (1 - 1e-9)
     base = OUT / f"large_run_{SCENE}"
     shutil.rmtree(base, ignore_errors=True)
     rows = []
+    if setup_only:
+        return rows + setup_rows(dx, base)
     run = base / "run"
     rows.append(mpirun("run 100 steps + snapshot + checkpoint", 2, run,
                        f"particles.dx={dx}", f"time.end={end!r}", f"output.interval={end!r}"))
@@ -95,6 +97,12 @@ def measure(dx: float) -> list[dict]:
                        f"time.end={2 * end!r}",
                        f"output.interval={end!r}", restart=True))
     shutil.rmtree(run, ignore_errors=True)
+    return rows + setup_rows(dx, base)
+
+
+def setup_rows(dx: float, base: Path) -> list[dict]:
+    """Set-up and one step on 1, 2 and 4 ranks (peak memory and set-up time)."""
+    rows = []
     for ranks in (1, 2, 4):
         out = base / f"setup_{ranks}"
         rows.append(mpirun("set-up + 1 step", ranks, out, f"particles.dx={dx}",
@@ -152,16 +160,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scene", default="collapse_dry",
                     help="a built-in scene (default collapse_dry; collapse_3d for 3D)")
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--setup-only", action="store_true",
+                    help="only the set-up and one step on 1, 2 and 4 ranks (the memory and "
+                    "set-up rows; a scene too large to run 200 steps here)")
     args = ap.parse_args(argv)
     global SCENE
     SCENE = args.scene
     OUT.mkdir(exist_ok=True)
     stem = "large_run" if SCENE == "collapse_dry" else f"large_run_{SCENE}"
+    if args.setup_only:
+        stem += "_setup"
     path = OUT / f"{stem}.json"
     if args.plot_only:
         rows = json.loads(path.read_text())["rows"]
     else:
-        rows = measure(args.dx)
+        rows = measure(args.dx, args.setup_only)
         path.write_text(json.dumps({"date": str(date.today()), "machine": platform.node(),
                                     "cpus": os.cpu_count(), "scene": SCENE, "dx": args.dx,
                                     "rows": rows},
