@@ -87,8 +87,10 @@ class CountingComm:
         return attr
 
 
-def worker(n: int) -> None:
-    """One measurement under mpirun: step time, owned and halo rows, traffic per step."""
+def measure_step(text: str, steps: int, warm: int = 3) -> None:
+    """One measurement under mpirun of the scene `text` (TOML): step time, owned and halo
+    rows, traffic per step (counted on the communicator), the slab face in particles;
+    rank 0 prints it as JSON."""
     from mpi4py import MPI
 
     from psph.app.run import make_slabs
@@ -96,28 +98,34 @@ def worker(n: int) -> None:
     from psph.solver.simulation import Simulation
 
     comm = MPI.COMM_WORLD
-    w, hgt, steps = SIZES[n]
-    scene = resolve(validate(tomllib.loads(BLOCK.format(n=n, w=w, hgt=hgt))))
+    scene = resolve(validate(tomllib.loads(text)))
     sim = Simulation(scene, make_slabs(scene, comm))
-    for _ in range(3):
+    for _ in range(warm):
         sim.advance_one()
     counting = CountingComm(sim.slabs.comm)
     sim.slabs.comm = counting
     windows = timed_windows(sim, comm, steps)
     per = 3 * steps
-    rec = {"particles": sim.n_global, "ranks": comm.Get_size(),
+    lo, hi = scene.domain.min, scene.domain.max
+    across = [d for d in range(scene.dim) if d != sim.slabs.axis]
+    face = math.prod((hi[d] - lo[d]) / scene.particles.dx for d in across)
+    rec = {"particles": sim.n_global, "ranks": comm.Get_size(), "axis": sim.slabs.axis,
            "seconds_per_step": min(windows) / steps,
            "owned": comm.gather(sim.store.n_owned, root=0),
            "halo": comm.gather(sim.store.n_halo, root=0),
            "messages_per_step": comm.gather(counting.messages / per, root=0),
            "bytes_per_step": comm.gather(counting.bytes / per, root=0),
            "collectives_per_step": comm.gather(counting.collectives / per, root=0),
-           "face_particles": round((scene.domain.max[1 - sim.slabs.axis]
-                                    - scene.domain.min[1 - sim.slabs.axis]) / scene.particles.dx)}
+           "face_particles": round(face)}
     if comm.Get_size() == 2:
         rec["network"] = network(comm)
     if comm.Get_rank() == 0:
         print(json.dumps(rec))
+
+
+def worker(n: int) -> None:
+    w, hgt, steps = SIZES[n]
+    measure_step(BLOCK.format(n=n, w=w, hgt=hgt), steps)
 
 
 def network(comm) -> dict:
@@ -151,21 +159,31 @@ def network(comm) -> dict:
             "alpha_coll_s": allreduce}
 
 
-def measure() -> dict:
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
-               OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1",
-               OMP_NUM_THREADS="1")
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "NUMBA_NUM_THREADS": "1",
+           "OMP_NUM_THREADS": "1"}
+
+
+def measure_workers(script: str, sizes) -> dict:
+    """`script --worker N` under mpirun on 1, 2 and 4 ranks for each size N: the runs'
+    records (the last stdout line of each, JSON)."""
+    env = dict(os.environ, **MPI_ENV)
     runs = []
-    for n in N_CHECK:
+    for n in sizes:
         for r in (1, 2, 4):
-            cmd = ["mpirun", "-n", str(r), sys.executable, __file__, "--worker", str(n)]
+            cmd = ["mpirun", "-n", str(r), sys.executable, script, "--worker", str(n)]
             res = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
             runs.append(json.loads(res.stdout.strip().splitlines()[-1]))
-            print(f"  measured N = {n:,} on {r} rank(s): "
-                  f"{runs[-1]['seconds_per_step'] * 1e3:.2f} ms/step", flush=True)
+            print(f"  measured N = {runs[-1]['particles']:,} on {r} rank(s): "
+                  f"{runs[-1]['seconds_per_step'] * 1e3:.2f} ms/step, halo "
+                  f"{max(runs[-1]['halo']):,} on the largest rank", flush=True)
     return {"date": str(date.today()), "machine": platform.node(), "cpus": os.cpu_count(),
             "runs": runs}
+
+
+def measure() -> dict:
+    return measure_workers(__file__, N_CHECK)
 
 
 def fit(data: dict) -> dict:
@@ -309,21 +327,24 @@ def plot(data: dict) -> None:
     plt.close(fig)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def bench_main(doc: str, name: str, worker, measure, report) -> None:
+    """The command line of a scaling model: measure (or `--model-only`: read
+    bench/out/<name>.json back), then `report`; `--worker N` is one mpirun measurement."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--worker", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--model-only", action="store_true",
-                    help="refit and redraw from bench/out/scaling_model.json")
+                    help=f"refit and redraw from bench/out/{name}.json")
     args = ap.parse_args()
     if args.worker:
         worker(args.worker)
         return
     OUT.mkdir(exist_ok=True)
-    if args.model_only:
-        data = json.loads((OUT / "scaling_model.json").read_text())
-    else:
-        data = measure()
+    data = json.loads((OUT / f"{name}.json").read_text()) if args.model_only else measure()
     report(data)
+
+
+def main() -> None:
+    bench_main(__doc__, "scaling_model", worker, measure, report)
 
 
 if __name__ == "__main__":

@@ -30,19 +30,11 @@ its rows are the model's prediction only.
 Prints the tables, writes bench/out/scaling_model_3d.json and .png.
 """
 
-import argparse
 import json
 import math
-import os
-import platform
-import subprocess
-import sys
-import tomllib
-from datetime import date
 from pathlib import Path
 
-from scaling import timed_windows
-from scaling_model import CLUSTER, CountingComm, fit, network
+from scaling_model import CLUSTER, bench_main, fit, measure_step, measure_workers
 from throughput import BLOCK_3D
 
 OUT = Path(__file__).resolve().parents[1] / "out"
@@ -54,56 +46,12 @@ P_TABLE = (1, 2, 4, 16, 64, 256, 1024)
 
 
 def worker(n: int) -> None:
-    """One measurement under mpirun: step time, owned and halo rows, traffic per step."""
-    from mpi4py import MPI
-
-    from psph.app.run import make_slabs
-    from psph.config.load import resolve, validate
-    from psph.solver.simulation import Simulation
-
-    comm = MPI.COMM_WORLD
     w, hgt, steps = SIZES[n]
-    scene = resolve(validate(tomllib.loads(BLOCK_3D.format(n=n, w=w, hgt=hgt))))
-    sim = Simulation(scene, make_slabs(scene, comm))
-    for _ in range(2):
-        sim.advance_one()
-    counting = CountingComm(sim.slabs.comm)
-    sim.slabs.comm = counting
-    windows = timed_windows(sim, comm, steps)
-    per = 3 * steps
-    lo, hi = scene.domain.min, scene.domain.max
-    across = [d for d in range(3) if d != sim.slabs.axis]
-    face = math.prod((hi[d] - lo[d]) / scene.particles.dx for d in across)
-    rec = {"particles": sim.n_global, "ranks": comm.Get_size(), "axis": sim.slabs.axis,
-           "seconds_per_step": min(windows) / steps,
-           "owned": comm.gather(sim.store.n_owned, root=0),
-           "halo": comm.gather(sim.store.n_halo, root=0),
-           "messages_per_step": comm.gather(counting.messages / per, root=0),
-           "bytes_per_step": comm.gather(counting.bytes / per, root=0),
-           "collectives_per_step": comm.gather(counting.collectives / per, root=0),
-           "face_particles": round(face)}
-    if comm.Get_size() == 2:
-        rec["network"] = network(comm)
-    if comm.Get_rank() == 0:
-        print(json.dumps(rec))
+    measure_step(BLOCK_3D.format(n=n, w=w, hgt=hgt), steps, warm=2)
 
 
 def measure() -> dict:
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
-               OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1",
-               OMP_NUM_THREADS="1")
-    runs = []
-    for n in SIZES:
-        for r in (1, 2, 4):
-            cmd = ["mpirun", "-n", str(r), sys.executable, __file__, "--worker", str(n)]
-            res = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
-            runs.append(json.loads(res.stdout.strip().splitlines()[-1]))
-            print(f"  measured N = {runs[-1]['particles']:,} on {r} rank(s): "
-                  f"{runs[-1]['seconds_per_step'] * 1e3:.1f} ms/step, halo "
-                  f"{max(runs[-1]['halo']):,} on the largest rank", flush=True)
-    return {"date": str(date.today()), "machine": platform.node(), "cpus": os.cpu_count(),
-            "runs": runs}
+    return measure_workers(__file__, SIZES)
 
 
 def step_time(k: dict, net: dict, n: float, p: int, halo: float, neighbours: int,
@@ -268,20 +216,7 @@ def plot(data: dict) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--worker", type=int, help=argparse.SUPPRESS)
-    ap.add_argument("--model-only", action="store_true",
-                    help="refit and redraw from bench/out/scaling_model_3d.json")
-    args = ap.parse_args()
-    if args.worker:
-        worker(args.worker)
-        return
-    OUT.mkdir(exist_ok=True)
-    if args.model_only:
-        data = json.loads((OUT / "scaling_model_3d.json").read_text())
-    else:
-        data = measure()
-    report(data)
+    bench_main(__doc__, "scaling_model_3d", worker, measure, report)
 
 
 if __name__ == "__main__":
