@@ -8,6 +8,8 @@ rank against the rank count.
     python bench/performance/large_run.py --dx 0.004      # a rehearsal at 0.5M particles (a minute)
     python bench/performance/large_run.py --plot-only
     python bench/performance/large_run.py --scene collapse_3d --dx 0.0058   # 2.0M in 3D
+    python bench/performance/large_run.py --scene collapse_3d --dx 0.0034 --steps 2
+        # 10M in 3D: the same protocol with 2 steps a run (100 take hours here)
 
 Each case is one `mpirun -n R python -m psph run collapse_dry`; its summary.json gives the
 set-up seconds, the seconds per step of the time loop (the snapshot and checkpoint writes
@@ -91,9 +93,9 @@ def measure(dx: float, setup_only: bool = False) -> list[dict]:
     if setup_only:
         return rows + setup_rows(dx, base)
     run = base / "run"
-    rows.append(mpirun("run 100 steps + snapshot + checkpoint", 2, run,
+    rows.append(mpirun(f"run {STEPS} steps + snapshot + checkpoint", 2, run,
                        f"particles.dx={dx}", f"time.end={end!r}", f"output.interval={end!r}"))
-    rows.append(mpirun("restart, 100 more steps", 2, run, f"particles.dx={dx}",
+    rows.append(mpirun(f"restart, {STEPS} more steps", 2, run, f"particles.dx={dx}",
                        f"time.end={2 * end!r}",
                        f"output.interval={end!r}", restart=True))
     shutil.rmtree(run, ignore_errors=True)
@@ -160,16 +162,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scene", default="collapse_dry",
                     help="a built-in scene (default collapse_dry; collapse_3d for 3D)")
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--steps", type=int, default=100,
+                    help="steps of the run and of the restart (default 100)")
     ap.add_argument("--setup-only", action="store_true",
                     help="only the set-up and one step on 1, 2 and 4 ranks (the memory and "
                     "set-up rows; a scene too large to run 200 steps here)")
     args = ap.parse_args(argv)
-    global SCENE
+    global SCENE, STEPS
     SCENE = args.scene
+    STEPS = args.steps
     OUT.mkdir(exist_ok=True)
     stem = "large_run" if SCENE == "collapse_dry" else f"large_run_{SCENE}"
     if args.setup_only:
         stem += "_setup"
+    elif args.steps != 100:
+        stem += f"_{args.steps}steps"
     path = OUT / f"{stem}.json"
     if args.plot_only:
         rows = json.loads(path.read_text())["rows"]
