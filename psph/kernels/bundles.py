@@ -46,8 +46,10 @@ def sorted_cells(cell_start: np.ndarray, order: np.ndarray, ncell: np.ndarray,
     """`Cells` of a cell list and the positions it sorts, rows below n_owned (default
     all) owned (tests and drivers; the time loop fills its own x_sorted)."""
     n = int(cell_start[int(np.prod(ncell))])
-    owned = order[:n] < (n if n_owned is None else n_owned)
-    before = np.concatenate([[0], np.cumsum(owned)]).astype(np.int64)
+    from psph.kernels.neighbours import count_owned
+
+    before = np.zeros(n + 1, np.int64)
+    count_owned(order, n, n if n_owned is None else n_owned, before)
     return Cells(cell_start, order, ncell, np.ascontiguousarray(x[order[:n]]), before)
 
 
