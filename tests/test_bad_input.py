@@ -167,7 +167,8 @@ def test_list_names_builtin_scenes():
                      "collapse_saturated_psi-5",
                      "collapse_saturated_psi0",
                      "collapse_saturated_psi2.5", "cryer", "geostatic_column", "harmonic",
-                     "retrogressive_k0_0.5", "retrogressive_k0_1.5", "slope_section",
+                     "retrogressive_k0_0.5", "retrogressive_k0_1.5", "slope_3d",
+                     "slope_section",
                      "strip_footing", "terzaghi", "terzaghi_3d", "terzaghi_tpi",
                      "terzaghi_undrained"]
 

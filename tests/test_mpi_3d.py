@@ -176,3 +176,29 @@ def test_layers_between_elevation_grids_one_vs_two_ranks_bitwise(tmp_path_factor
         sv, p = _reference(last["x"][:, 2] - last["u"][:, 2])
         assert np.max(np.abs(last["p"] - p)) < 0.005 * p.max()
         assert np.max(np.abs(last["stress"][:, 2] - sv)) < 0.02 * np.abs(sv).max()
+
+
+@pytest.mark.mpi(min_size=2)
+def test_slope_3d_cut_to_a_depth_one_vs_two_ranks_bitwise(tmp_path_factory):
+    """`slope_3d` coarsened (`tests/test_slope_3d.py`), its toe cut in plan to 6 m below
+    each column's top (the columns' tops a maximum over the ranks): the same bits on 1
+    and 2 ranks, and the same plan metrics."""
+    from mpi4py import MPI
+
+    from tests.test_slope_3d import SHORT
+
+    comm = MPI.COMM_WORLD
+    out = shared_tmp(comm, tmp_path_factory)
+    cut = ["remove=[{at = 0.0, polygon = [[150.0, 0.0], [200.0, 0.0], [200.0, 9.0], "
+           "[150.0, 9.0]], depth = 6.0}]"]
+    scene = load_scene("slope_3d", SHORT + cut)
+    _one_vs_two(comm, scene, out, ())
+    if comm.Get_rank() == 0:
+        one, two = (json.loads((out / k / "summary.json").read_text())["metrics"]
+                    for k in ("one", "two"))
+        assert one["slope_3d"] == two["slope_3d"]
+        x = read_snapshots(out / "two" / "particles.h5")[1]
+        x0 = x["x"] - x["u"]
+        under = (x0[:, 0] > 152.0) & (x0[:, 1] < 9.0)
+        ground = 20.0 * (180.0 - x0[under, 0]) / 39.25  # the slope's face there
+        assert under.any() and np.all(x0[under, 2] < ground - 6.0)

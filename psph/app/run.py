@@ -13,7 +13,7 @@ import numpy as np
 from psph.app.memory import check_memory
 from psph.app.restart_rules import check_restart_scene
 from psph.config.load import to_toml
-from psph.config.rules import check_symmetry_planes
+from psph.config.rules import check_symmetry_planes, is_slope_3d
 from psph.config.schema import Scene
 from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts
 from psph.errors import (
@@ -35,6 +35,7 @@ from psph.verify import history_errors, reference_times
 from psph.verify.collapse import collapse_verification
 from psph.verify.collapse_3d import axisymmetric_verification
 from psph.verify.errors import TerzaghiMonitor
+from psph.verify.slope_3d import slope_verification
 
 CONTROL_EVERY = 20  # steps between the collective checks (failure, stop signal, wall clock)
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGUSR1)
@@ -390,7 +391,8 @@ def _finish(sim, slabs, out, history, setup_seconds, loop_seconds, monitor, prob
         verification = history_errors(scene, cols, {k: pos for k, (_, pos) in probes.items()})
     if scene.verification.reference == "collapse" and status == "finished":
         axisymmetric = scene.dim == 3 and len(scene.particles.cylinders) == 1
-        verify = axisymmetric_verification if axisymmetric else collapse_verification
+        verify = axisymmetric_verification if axisymmetric else \
+            slope_verification if is_slope_3d(scene) else collapse_verification
         verification = verify(out / "particles.h5", scene, slabs.comm)
         if history:
             verification["p_max_Pa"] = max(r["p_max"] for r in history)

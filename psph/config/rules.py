@@ -60,6 +60,9 @@ def check_scene(scene):
         box = rm.min is not None and rm.max is not None
         if box == (rm.polygon is not None) or (rm.min is None) != (rm.max is None):
             raise _Rule(f"remove[{ir}]", "region", "give either min and max, or polygon")
+        if rm.depth is not None and (rm.polygon is None or dim == 2):
+            raise _Rule(f"remove[{ir}].depth", rm.depth, "only with a polygon in plan in a "
+                        "3D scene (a 2D polygon is the region itself)")
     for im, mesh in enumerate(pa.meshes):
         if not Path(mesh.file).is_file():
             raise _Rule(f"particles.meshes[{im}].file", mesh.file, "no such file")
@@ -157,19 +160,28 @@ def check_scene(scene):
     return scene
 
 
+def is_slope_3d(scene) -> bool:
+    """A 3D scene of soil between elevation grids only (`verify/slope_3d.py`)."""
+    p = scene.particles
+    return scene.dim == 3 and bool(p.layers) and not (p.blocks or p.cylinders or p.spheres
+                                                      or p.meshes)
+
+
 def check_collapse_3d(scene) -> None:
     """A 3D collapse is either axisymmetric (exactly one [[particles.cylinders]],
-    `verify/collapse_3d.py`) or a plane-strain slab (blocks only, between slip walls at the
-    front and the back: the 2D metrics in the x-z plane, `verify/collapse.py`)."""
+    `verify/collapse_3d.py`), a slope (layers only: the centre line's section and the
+    plan, `verify/slope_3d.py`) or a plane-strain slab (blocks only, between slip walls at
+    the front and the back: the 2D metrics in the x-z plane, `verify/collapse.py`)."""
     p = scene.particles
-    if len(p.cylinders) == 1:
+    if len(p.cylinders) == 1 or is_slope_3d(scene):
         return
     b = scene.boundaries
     slab = (not p.cylinders and not p.spheres and not p.meshes and p.blocks
             and all(getattr(b, side).motion == "slip" for side in ("front", "back")))
     if not slab:
         raise _Rule("verification.reference", "collapse", "in 3D needs exactly one "
-                    "[[particles.cylinders]] (the axisymmetric collapse) or blocks between "
+                    "[[particles.cylinders]] (the axisymmetric collapse), layers only (a "
+                    "slope) or blocks between "
                     "slip walls at the front and the back (a plane-strain slab)")
     y0, y1 = scene.domain.min[1], scene.domain.max[1]
     for i, blk in enumerate(p.blocks):
@@ -229,7 +241,6 @@ def check_dimension(scene) -> None:
     pa = scene.particles
     two_d = [("particles.polygons", pa.polygons),
              ("boundaries.polylines", b.polylines),
-             ("remove.polygon", [r for r in scene.remove if r.polygon is not None]),
              ("loads.range", [ld for ld in scene.loads if ld.range is not None]),
              ("initial.water_table", [] if scene.initial.water_table is None
               or isinstance(scene.initial.water_table, (float, str)) else [1]),

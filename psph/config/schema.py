@@ -278,7 +278,9 @@ class Verification(_Model):
 
 class Removal(_Model):
     """Particles inside a region at time `at` are removed from the run: the gate of a
-    collapse, an excavated slope toe. The region is a box (min, max) or a polygon."""
+    collapse, an excavated slope toe, a river's cut. The region is a box (min, max) or a
+    polygon: in 2D in the x-y plane, in 3D in plan (x, y), every particle above it or,
+    with `depth`, those within `depth` of their dx x dx column's highest particle."""
 
     at: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Time the region's particles are removed [s]")
@@ -288,6 +290,9 @@ class Removal(_Model):
                             "[m]")
     polygon: Annotated[list[Vec2], Field(min_length=3)] | None = Field(
         None, description="Vertices of a polygon region, at least 3 (instead of min/max) [m]")
+    depth: Pos | None = Field(
+        None, description="3D polygon in plan: remove the particles within this depth of "
+        "their dx x dx column's highest particle (default: the whole column) [m]")
 
 
 class Initial(_Model):

@@ -105,3 +105,28 @@ def inside_triangles(points: np.ndarray, xy: np.ndarray, tri: np.ndarray) -> np.
         tol = 1e-12
         inside[sel] |= (u >= -tol) & (w >= -tol) & (u + w <= 1 + tol)
     return inside
+
+
+def removal_region(x: np.ndarray, region, dx: float, reducer) -> np.ndarray:
+    """Mask of the points x (n, dim) inside a `[[remove]]` region (`schema.Removal`): a
+    box (min, max); a polygon, in 2D in the x-y plane, in 3D in plan (x, y) with every
+    point above it or, with `depth`, the points within `depth` of the highest point of
+    their dx x dx column (a cut that follows the ground). Collective with `depth` (the
+    columns' tops are a max over ranks, `reducer.max`)."""
+    if region.polygon is None:
+        return np.all((x >= np.array(region.min)) & (x <= np.array(region.max)), axis=1)
+    inside = inside_polygon(x[:, :2], region.polygon)
+    if x.shape[1] == 2 or region.depth is None:
+        return inside
+    lo = np.min(np.asarray(region.polygon, float), axis=0)
+    span = np.ptp(np.asarray(region.polygon, float), axis=0)
+    shape = (np.floor(span / dx).astype(np.int64) + 1)
+    col = np.floor((x[inside, :2] - lo) / dx).astype(np.int64)
+    col = np.minimum(col, shape - 1)
+    flat = col[:, 1] * shape[0] + col[:, 0]
+    top = np.full(int(shape[0] * shape[1]), -np.inf)
+    np.maximum.at(top, flat, x[inside, 2])
+    top = reducer.max(top)
+    deep = x[inside, 2] < top[flat] - region.depth
+    inside[np.flatnonzero(inside)[deep]] = False
+    return inside

@@ -17,7 +17,7 @@ from psph.config.schema import Scene
 from psph.decomposition.census import Census
 from psph.errors import NumericalError
 from psph.geometry.lattice import extent, seed
-from psph.geometry.shapes import inside_polygon
+from psph.geometry.shapes import removal_region
 from psph.kernels.laplacian import lattice_moment
 from psph.kernels.spline import w_cubic, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
@@ -254,10 +254,7 @@ class Simulation(Stages):
             st = self.store
             n = st.n_owned
             x = st.x[:n]
-            if rm.polygon is not None:
-                inside = inside_polygon(x, rm.polygon)
-            else:
-                inside = np.all((x >= np.array(rm.min)) & (x <= np.array(rm.max)), axis=1)
+            inside = removal_region(x, rm, self.scene.particles.dx, self.slabs.reducer)
             ids = st.key[:n][inside].astype(np.int64)
             keep = np.flatnonzero(~inside)
             for a in st.all_rows:
