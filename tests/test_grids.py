@@ -238,6 +238,11 @@ def test_a_bedrock_grid_lines_the_floor_as_inline_triangles_do(tmp_path):
     ("cross", ["particles.layers[0].bottom", "base.asc", "above the top", "cross"]),
     ("profile", ["particles.layers[1].top", "elevation grids"]),
     ("table", ["initial.water_table", "table.asc", "outside the grid"]),
+    ("dry", ["initial.water_table", "table.asc at row", "x = 0.025, y = 0.025",
+             "0.05 m below the bedrock", "base.asc at row", "z = 0.1 m",
+             "a saturated layer needs its water table above the bedrock"]),
+    ("dry_level", ["initial.water_table = level", "x = 0.025, y = 0.025",
+                   "0.05 m below the bedrock", "base.asc"]),
 ])
 def test_bad_grids_exit_2_one_line_nothing_written(tmp_path, case, words):
     scene, files = _layered_scene(tmp_path)
@@ -258,6 +263,13 @@ def test_bad_grids_exit_2_one_line_nothing_written(tmp_path, case, words):
         (tmp_path / "grid_layers.toml").write_text(text)
     elif case == "table":
         write_asc(tmp_path / "table.asc", 0.5, 0.5, 0.1, WATER_TABLE * flat, corner=False)
+    elif case in ("dry", "dry_level"):  # the bedrock raised to 0.1 m, the table at 0.05 m
+        write_asc(tmp_path / "base.asc", -0.1, -0.1, 0.1, 0.1 * flat, corner=False)
+        write_asc(tmp_path / "table.asc", -0.1, -0.1, 0.1, 0.05 * flat, corner=False)
+        if case == "dry_level":
+            text = (tmp_path / "grid_layers.toml").read_text().replace(
+                f'water_table = "{files["table"]}"', "water_table = 0.05")
+            (tmp_path / "grid_layers.toml").write_text(text)
     out = tmp_path / "out"
     r = run_cli("run", str(tmp_path / "grid_layers.toml"), "--out", str(out))
     assert_bad_input(r, words, out)

@@ -12,7 +12,14 @@ from psph.config.boundaries import triangles_of
 from psph.config.materials import check_materials
 from psph.errors import SceneRule as _Rule
 from psph.geometry.box import side_planes
-from psph.geometry.grids import GridError, check_cover, check_layer_grids, is_grid_file, read_grid
+from psph.geometry.grids import (
+    GridError,
+    check_cover,
+    check_layer_grids,
+    check_table_over_bedrock,
+    is_grid_file,
+    read_grid,
+)
 from psph.geometry.lattice import lattice_axes
 from psph.geometry.profiles import ProfileError, check_layer_profiles, check_water_table
 from psph.geometry.solids import read_surface
@@ -117,6 +124,9 @@ def check_scene(scene):
         except ProfileError as e:
             where = "" if e.where in ("points", "file", "level") else f" {e.where}"
             raise _Rule(f"initial.water_table{where}", e.value, e.rule) from None
+    if dim == 3 and pa.layers and scene.pressure.scheme != "none" and table is not None \
+            and table != "surface":
+        check_saturated_layers(scene, table)
     if (scene.initial.k0 is not None or scene.initial.water_table is not None) \
             and scene.gravity[dim - 1] >= 0.0:
         key = "initial.k0" if scene.initial.k0 is not None else "initial.water_table"
@@ -158,6 +168,20 @@ def check_scene(scene):
         check_tpi_stability(scene)
     check_integrator(scene)
     return scene
+
+
+def check_saturated_layers(scene, table) -> None:
+    """A coupled 3D scene of layers between elevation grids: its water table (a level or
+    a grid) nowhere below the bedrock (the layers' lowest bottom) at the domain's
+    lattice columns (`grids.check_table_over_bedrock`)."""
+    xs, ys = lattice_axes(scene.domain.min, scene.domain.max, scene.particles.dx)[:2]
+    gx, gy = (a.ravel() for a in np.meshgrid(xs, ys))
+    bottoms = [read_grid(layer.bottom) for layer in scene.particles.layers]
+    try:
+        check_table_over_bedrock(read_grid(table) if isinstance(table, str) else table,
+                                 bottoms, gx, gy)
+    except GridError as e:
+        raise _Rule(f"initial.water_table = {e.where}", e.value, e.rule) from None
 
 
 def is_slope_3d(scene) -> bool:

@@ -296,3 +296,27 @@ def check_layer_grids(layer, key: str, xs: np.ndarray, ys: np.ndarray
                         f"x = {gx[k]:g}, y = {gy[k]:g}",
                         f"above the top (by {-gap[k]:g} m): the surfaces cross")
     return grids["top"], grids["bottom"]
+
+
+def check_table_over_bedrock(table, bottoms: list[ElevationGrid], px: np.ndarray,
+                             py: np.ndarray) -> None:
+    """A saturated scene's water table (an elevation grid, or a level) nowhere below the
+    bedrock, the lowest of the layers' `bottoms`, at the lattice columns (px, py): there
+    the soil above would hold no water table. GridError names the table's node (a level:
+    the column) and the bedrock's grid."""
+    low = np.stack([b.at(px, py) for b in bottoms])
+    which = np.argmin(low, axis=0)
+    rock = low[which, np.arange(len(px))]
+    z = table.at(px, py) if isinstance(table, ElevationGrid) else np.full(len(px), table)
+    gap = z - rock
+    scale = max(float(np.ptp(rock)), 1.0)
+    if np.all(gap >= -1e-9 * scale):
+        return
+    k = int(np.argmin(gap))
+    x, y = float(px[k]), float(py[k])
+    where = f"{table.path} at {table.where(x, y)}" if isinstance(table, ElevationGrid) \
+        else "level"
+    raise GridError(where, f"x = {x:g}, y = {y:g}",
+                    f"{-gap[k]:g} m below the bedrock ({bottoms[which[k]].path} at "
+                    f"{bottoms[which[k]].where(x, y)}, z = {rock[k]:g} m): a saturated "
+                    "layer needs its water table above the bedrock")
