@@ -111,3 +111,20 @@ def test_a_depth_with_a_box_is_bad_input(tmp_path):
                 "remove=[{at = 0.0, min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0], "
                 "depth = 1.0}]")
     assert_bad_input(r, ["remove[0].depth", "only with a polygon in plan"], out)
+
+
+def test_the_scarp_width_stops_at_the_domains_side():
+    """A scarp across the whole of a 5 m wide half model: its 2 dx rows are cut at the
+    side wall, the valley's width twice the model's 5 m."""
+    from mpi4py import MPI
+
+    from psph.config.load import load_scene
+    from psph.verify.slope_3d import plan_metrics
+
+    scene = load_scene("slope_3d", ["domain.max=[20.0, 5.0, 40.0]"])
+    g = np.arange(5) + 0.5
+    x0 = np.array([(a, b, c) for a in g for b in g for c in np.arange(20) + 0.5])
+    x = x0.copy()
+    x[(x0[:, 0] < 2.0) & (x0[:, 2] > 16.0), 0] += 12.0  # the top of the first two rows
+    m = plan_metrics(x, x - x0, np.ones(len(x)), scene, 20.0, MPI.COMM_SELF)
+    assert m["scarp_width_m"] == 2 * 5.0

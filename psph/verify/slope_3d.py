@@ -7,8 +7,9 @@
   (`collapse.plane_strain_view`, `collapse.collapse_metrics`), so the numbers are those
   of `retrogressive_k0_0.5`.
 - In plan: the retrogression (the centre line's back scarp behind its initial place);
-  the scarp's width (across the valley, the extent in y of the 2 dx x 2 dx columns of the
-  initially level top whose surface has dropped below 95 % of the slope's height); the
+  the scarp's width (across the valley: the width of the rows in y that hold a 2 dx x
+  2 dx column of the initially level top whose surface has dropped below 95 % of the
+  slope's height, the last row cut at the domain's side); the
   debris (particles moved more than `DEBRIS_DX` dx): its footprint (the plan area of the
   dx x dx columns holding debris) and its volume (the sum of the debris particles' V).
   With a symmetry plane at the front (a half model) the width, area and volume are the
@@ -53,8 +54,9 @@ def plan_metrics(x: np.ndarray, u: np.ndarray, vol: np.ndarray, scene, h0: float
     # the scarp: columns 2 dx wide of the level top (initially above 0.95 h0), now below
     top, top0 = (_column_top(p, lo, hi, 2.0 * dx, dx, comm) for p in (x, x - u))
     scarp = (top0 >= SCARP_DROP * h0) & (top < SCARP_DROP * h0)
-    rows = np.flatnonzero(scarp.any(axis=0))
-    width = mirror * 2.0 * dx * len(rows)
+    rows = np.flatnonzero(scarp.any(axis=0))  # rows of columns across the valley (y)
+    edges = np.minimum(lo[1] + 2.0 * dx * np.stack([rows, rows + 1]), hi[1])
+    width = mirror * float(np.sum(edges[1] - edges[0]))
     # the debris: moved more than DEBRIS_DX dx
     debris = np.linalg.norm(u, axis=1) > DEBRIS_DX * dx
     shape = _plan_shape(lo, hi, dx)
