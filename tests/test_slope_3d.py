@@ -71,7 +71,9 @@ def test_plan_metrics_count_the_scarp_rows_the_footprint_and_the_debris_volume()
 def test_slope_3d_cuts_the_toe_in_plan_and_reports_the_section_and_the_plan(tmp_path):
     """The built-in scene, coarsened, through the gravity loading, the cut and 0.1 s:
     the toe is gone under the cut's polygon only, the centre line's metrics are those of
-    the 2D scene (the initial back scarp at its crest), the plan's block is there."""
+    the 2D scene (the initial back scarp at its crest), the plan's block is there, and
+    `psph plot` draws the section, plan and perspective views, the centre line's frames
+    and the plan's frames."""
     from mpi4py import MPI
 
     from psph.config.load import load_scene
@@ -93,6 +95,11 @@ def test_slope_3d_cuts_the_toe_in_plan_and_reports_the_section_and_the_plan(tmp_
     assert plan["series"]["time_s"] == m["collapse"]["series"]["time_s"]
     assert plan["retrogression_m"] == 0.0 and plan["scarp_width_m"] == 0.0
     assert m["pressure_quality"]["over_run"]["abs_excess_p99_max_Pa"] > 0.0
+    from psph.analysis.plot import plot_run
+
+    names = {p.name for p in plot_run(tmp_path / "out")}  # the centre section's frames
+    assert {"slope_3d.png", "plan_frames.png", "section_p.png", "plan.png",
+            "perspective_p.png"} <= names
 
 
 @pytest.mark.parametrize("setting, words", [

@@ -16,15 +16,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import ListedColormap  # noqa: E402
 
-from psph.analysis.views_3d import pictures_3d  # noqa: E402
+from psph.analysis.views_3d import pictures_3d, plan_change_frames  # noqa: E402
 from psph.config.boundaries import points_of  # noqa: E402
 from psph.config.load import run_scene  # noqa: E402
+from psph.config.rules import is_slope_3d  # noqa: E402
 from psph.errors import SceneError  # noqa: E402
 from psph.geometry.lattice import probe_ids  # noqa: E402
 from psph.io.snapshots import read_snapshots  # noqa: E402
 from psph.verify import history_errors, terzaghi  # noqa: E402
 from psph.verify.harmonic import from_scene  # noqa: E402
 from psph.verify.pressure import excess_pressure, phreatic_excess  # noqa: E402
+from psph.verify.slope_3d import centre_section, centre_strip  # noqa: E402
 
 
 def plot_run(out: Path, field: str = "p") -> list[Path]:
@@ -52,6 +54,11 @@ def plot_run(out: Path, field: str = "p") -> list[Path]:
         paths.append(_strip_picture(out, scene, snaps))
     elif ref == "collapse" and scene.dim == 2:  # 3D: the section, plan and perspective
         paths.append(_collapse_picture(out, scene, snaps))
+    elif ref == "collapse" and is_slope_3d(scene):  # the centre line as the 2D scene's
+        paths.append(_collapse_picture(out, scene, [centre_section(s, scene)
+                                                    for s in snaps]))
+        paths.append(plan_change_frames(out, snaps, scene.particles.dx,
+                                        scene.domain.min[2], centre_strip(scene)[2]))
     elif ref == "cryer":
         paths.append(_cryer_picture(out, scene))
     return paths

@@ -89,3 +89,49 @@ def _save(fig, path: Path) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def surface_top(x: np.ndarray, dx: float, lo, shape, base: float) -> np.ndarray:
+    """The surface (top particle + dx / 2) of each dx x dx plan column of the grid from
+    `lo` with `shape` (nx, ny); `base` where the column is empty."""
+    idx = np.floor((x[:, :2] - lo) / dx).astype(np.int64)
+    idx = np.clip(idx, 0, np.array(shape) - 1)
+    top = np.full(shape, -np.inf)
+    np.maximum.at(top, (idx[:, 0], idx[:, 1]), x[:, 2] + 0.5 * dx)
+    return np.where(np.isfinite(top), top, base)
+
+
+def plan_change_frames(out: Path, snaps: list[dict], dx: float, base: float,
+                       mirror: bool = False, name: str = "plan_frames.png") -> Path:
+    """Plan views of a slope at up to four snapshot times (after the first, the last
+    and two between): the ground surface's change since the first snapshot in each
+    dx x dx column, the scarp (lowered, blue) and the deposit (raised, red). `mirror`:
+    a half model with its symmetry plane at the lowest y, drawn with its mirror image
+    (the whole valley)."""
+    import matplotlib.pyplot as plt
+
+    picks = np.unique(np.linspace(1 if len(snaps) > 1 else 0, len(snaps) - 1, 4).astype(int))
+    frames = [snaps[i] for i in picks]
+    x_all = np.concatenate([snaps[0]["x"]] + [f["x"] for f in frames])
+    lo = x_all[:, :2].min(axis=0) - 0.5 * dx
+    shape = tuple(int(n) for n in np.floor((x_all[:, :2].max(axis=0) - lo) / dx) + 1)
+    top0 = surface_top(snaps[0]["x"], dx, lo, shape, base)
+    changes = [surface_top(f["x"], dx, lo, shape, base) - top0 for f in frames]
+    lim = max(max(float(np.abs(c).max()) for c in changes), 1e-6)
+    y0, y1 = lo[1], lo[1] + shape[1] * dx
+    if mirror:  # the image across y = y0 below the model
+        changes = [np.concatenate([c[:, ::-1], c], axis=1) for c in changes]
+        y0 = 2 * lo[1] - y1
+    extent = (lo[0], lo[0] + shape[0] * dx, y0, y1)
+    aspect = (y1 - y0) / (shape[0] * dx)
+    fig, axes = plt.subplots(len(frames), 1, squeeze=False,
+                             figsize=(12, 0.8 + len(frames) * (12 * aspect + 0.6)))
+    for ax, f, c in zip(axes[:, 0], frames, changes, strict=True):
+        im = ax.imshow(c.T, origin="lower", extent=extent, cmap="RdBu_r", vmin=-lim,
+                       vmax=lim, aspect="equal")
+        whole = ", mirrored across the symmetry plane" if mirror else ""
+        ax.set_title(f"surface change since t = {snaps[0]['time']:.3g} s, at t = "
+                     f"{f['time']:.3g} s{whole}", fontsize=9)
+        ax.set(xlabel="x (m)", ylabel="y (m)")
+        fig.colorbar(im, ax=ax, label="dz (m)", shrink=0.9)
+    return _save(fig, out / name)

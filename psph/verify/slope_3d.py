@@ -42,6 +42,18 @@ def centre_strip(scene) -> tuple[float, float, bool]:
     return mid - dx, mid + dx, False
 
 
+def centre_section(snap: dict, scene) -> dict:
+    """A whole snapshot's centre line (`centre_strip`) as a 2D snapshot in the x-z plane
+    (`collapse.plane_strain_view`): every per-particle field of the strip's rows."""
+    ylo, yhi, _ = centre_strip(scene)
+    y = snap["x"][:, 1]
+    strip = (y >= ylo) & (y < yhi)
+    n = len(y)
+    rows = {k: v[strip] if isinstance(v, np.ndarray) and v.shape[:1] == (n,) else v
+            for k, v in snap.items()}
+    return plane_strain_view(rows)
+
+
 def plan_metrics(x: np.ndarray, u: np.ndarray, vol: np.ndarray, scene, h0: float,
                  comm) -> dict:
     """The plan's numbers of one snapshot (this rank's rows x, u (n, 3) and V; collective):
@@ -104,8 +116,7 @@ def slope_verification(path, scene, comm) -> dict:
             share = read_share(g, names, comm)
             time = float(g.attrs["time"])
             x = share["x"]
-            strip = (x[:, 1] >= ylo) & (x[:, 1] < yhi)
-            section = plane_strain_view({k: v[strip] for k, v in share.items()})
+            section = centre_section(share, scene)
             section["time"] = time
             m = collapse_metrics(section["x"], section["x"] - section["u"], dx, comm)
             m["time_s"] = time
