@@ -20,12 +20,17 @@ CHECKPOINT = ["checkpoint.every=3500", "checkpoint.at_end=false"]  # between the
 
 
 def _mpirun(ranks: int, scene, out, *extra: str, restart=None) -> None:
+    _mpirun_scene(ranks, scene, out, SETTINGS + list(extra), restart=restart)
+
+
+def _mpirun_scene(ranks: int, scene, out, settings: list[str], restart=None) -> None:
+    """`mpirun -n ranks psph run scene --set ...` as a user starts it; asserts exit 0."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
                OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1")
     cmd = ["mpirun", "-n", str(ranks), sys.executable, "-m", "psph", "run", str(scene),
            "--out", str(out), "--quiet"]
-    for assignment in SETTINGS + list(extra):
+    for assignment in settings:
         cmd += ["--set", assignment]
     if restart is not None:
         cmd += ["--restart", str(restart)]

@@ -15,6 +15,7 @@ from psph.app.restart_rules import check_restart_scene
 from psph.config.load import to_toml
 from psph.config.rules import check_symmetry_planes, is_slope_3d
 from psph.config.schema import Scene
+from psph.decomposition.boxes import Boxes, choose_layout
 from psph.decomposition.slabs import CommReducer, Slabs, cuts_from_counts
 from psph.errors import (
     EARLY_STOP_SIGNALS,
@@ -50,23 +51,63 @@ def _slab_axis(scene: Scene) -> int:
 
 def make_slabs(scene: Scene, comm=None) -> Slabs:
     """Slabs with equal counts of the initial particles: counted per lattice coordinate,
-    each rank counting a share of the lattice, never built whole (collective)."""
+    each rank counting a share of the lattice, never built whole (collective). With
+    boxes along two axes (`decomposition.cuts`, `box_layout`) these are the slabs the
+    particles are seeded in; `Simulation` moves them to their boxes."""
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD if comm is None else comm
     axis = _slab_axis(scene)
     width = halo_width(scene)
-    values, counts = census(scene, axis, CommReducer(comm))
-    return Slabs(axis, cuts_from_counts(values, counts, comm.Get_size(), width), comm)
+    reducer = CommReducer(comm)
+    values, counts = census(scene, axis, reducer)
+    cuts = cuts_from_counts(values, counts, comm.Get_size(), width)
+    layout = box_layout(scene, comm.Get_size(), reducer, (values, counts))
+    if layout is None:
+        return Slabs(axis, cuts, comm)
+    return Boxes((axis, layout[0]), layout[1], cuts, comm)
+
+
+def box_layout(scene: Scene, size: int, reducer, census_axis=None
+               ) -> tuple[int, tuple[int, int]] | None:
+    """(a1, (n0, n1)) of boxes along two axes (`decomposition.boxes.choose_layout`:
+    a1 the particles' longest side but the slab axis), or None for slabs (collective:
+    the initial particles' extents from the lattice's census). SceneError for
+    `decomposition.cuts = "boxes"` on a rank count without two factors > 1."""
+    mode = scene.decomposition.cuts
+    if mode == "slabs" or size == 1:
+        return None
+    axis = _slab_axis(scene)
+    ext = np.zeros(scene.dim)
+    for d in range(scene.dim):
+        values, counts = census_axis if d == axis and census_axis is not None \
+            else census(scene, d, reducer)
+        taken = values[counts > 0]
+        ext[d] = np.ptp(taken) if len(taken) else 0.0
+    a1 = max((d for d in range(scene.dim) if d != axis), key=lambda d: ext[d])
+    shape = choose_layout((ext[axis], ext[a1]), size, mode)
+    if shape is None:
+        raise SceneError(f"decomposition.cuts = 'boxes': {size} ranks have no factors "
+                         "n0 x n1 with both above 1 (run on 4, 6, 8, 9, ... ranks, or cut "
+                         "slabs)")
+    return None if shape[1] == 1 else (a1, shape)
 
 
 def _read_restart(path: Path, scene: Scene, comm) -> tuple[dict, dict]:
-    """(meta, {"cuts", "particles": this rank's rows, "removed": its share of the removed
-    ids}) of the checkpoint `path`, whose physics must be the scene's (collective)."""
+    """(meta, {"slabs": the layout, "particles": this rank's rows, "removed": its share of
+    the removed ids}) of the checkpoint `path`, whose physics must be the scene's
+    (collective)."""
+    layout = box_layout(scene, comm.Get_size(), CommReducer(comm))
     meta, cuts, particles, removed = read_restart(
         path, comm, _slab_axis(scene), halo_width(scene),
-        check=lambda meta: check_restart_scene(meta["scene"], scene, f"--restart {path}"))
-    return meta, {"cuts": cuts, "particles": particles, "removed": removed}
+        check=lambda meta: check_restart_scene(meta["scene"], scene, f"--restart {path}"),
+        boxes=layout)
+    if layout is None:
+        slabs = Slabs(_slab_axis(scene), cuts, comm)
+    else:
+        slabs = Boxes((_slab_axis(scene), layout[0]), layout[1], cuts[0], comm,
+                      cuts0=cuts[1], cuts1=cuts[2])
+    return meta, {"slabs": slabs, "particles": particles, "removed": removed}
 
 
 def _check_restart_census(sim: Simulation, path: Path) -> None:
@@ -174,8 +215,7 @@ def _run(scene: Scene, out: Path, comm, quiet: bool, restart: Path | None,
     if restart is not None:  # read and check before anything is written
         meta, state = _read_restart(restart, scene, comm)
     check_output_directory(out, comm)
-    slabs = make_slabs(scene, comm) if state is None \
-        else Slabs(_slab_axis(scene), state["cuts"], comm)
+    slabs = make_slabs(scene, comm) if state is None else state["slabs"]
     rank0 = slabs.rank == 0
     toml_text = to_toml(scene)
 
@@ -471,6 +511,7 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
     steps = sim.step - sim.first_step  # this run's share (a restart starts later)
     psteps = sim.n_global * steps
     memory = comm.allgather((peak_rss_bytes(), sim.state_bytes(), sim.store.n_owned))
+    layout = slabs.describe()
     summary = {
         "scene": sim.scene.name,
         "wall_time_s": setup_seconds + loop_seconds,
@@ -501,8 +542,10 @@ def _summary(sim, slabs, setup_seconds, loop_seconds, monitor) -> dict:
             "imbalance_final": slabs.imbalance(sim.store),
             "imbalance_max_seen": slabs.max_imbalance,
             "imbalance_max_after_recut": slabs.max_after_recut,
-            "cuts": [float(c) for c in slabs.cuts[1:-1]],
+            "cuts": layout.get("cuts", layout.get("cuts0")),
         },
+        "decomposition": {**layout, "halo_rows_per_rank": comm.allgather(sim.store.n_halo),
+                          "owned_per_rank": comm.allgather(sim.store.n_owned)},
         "stage_seconds": stages,
     }
     if sim.stepping.scheme_main == SCHEME_PROJECTION:

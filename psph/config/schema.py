@@ -328,6 +328,10 @@ class Decomposition(_Model):
     axis: Literal["auto", "x", "y", "z"] = Field(
         "auto", description="Slab axis: \"auto\" (the domain's longest side), \"x\", \"y\" "
         "or, in 3D, \"z\"")
+    cuts: Literal["auto", "slabs", "boxes"] = Field(
+        "auto", description="\"slabs\" along `axis`; \"boxes\": slabs cut again along the "
+        "particles' next longest side (two axes, issue 38); \"auto\": boxes where their "
+        "busiest rank holds less halo than the slabs' (4 or more ranks)")
     rebalance_every: Annotated[int, Field(ge=0)] = Field(
         200, description="Steps between imbalance checks; 0 is never (the slabs stay as "
         "cut at the start)")

@@ -9,14 +9,15 @@ import numpy as np
 from mpi4py import MPI
 
 
-def balanced_cuts(comm, coord: np.ndarray, min_width: float, iterations: int = 60
-                  ) -> np.ndarray:
-    """Cuts (size + 1,) so that each rank owns about the same number of particles.
+def balanced_cuts(comm, coord: np.ndarray, min_width: float, iterations: int = 60,
+                  parts: int | None = None) -> np.ndarray:
+    """Cuts (parts + 1,) so that each of `parts` slabs (default: one a rank) holds about
+    the same number of particles.
 
-    coord: this rank's owned particle coordinates along the slab axis. Collective.
+    coord: this rank's particle coordinates along the slab axis. Collective.
     The outer cuts are -inf and +inf.
     """
-    size = comm.Get_size()
+    size = comm.Get_size() if parts is None else parts
     cuts = np.full(size + 1, np.inf)
     cuts[0] = -np.inf
     if size == 1:

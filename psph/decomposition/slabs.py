@@ -184,6 +184,19 @@ class Slabs:
         """(axis, lo, hi): this rank owns the coordinates along axis in [lo, hi)."""
         return self.axis, float(self.lo), float(self.hi)
 
+    @property
+    def region(self) -> tuple[tuple[int, float, float], ...]:
+        """This rank's part of the domain as (axis, lo, hi) along each cut axis."""
+        return (self.slab,)
+
+    def describe(self) -> dict:
+        """The layout for summary.json."""
+        return {"layout": "slabs", "axis": int(self.axis),
+                "cuts": [float(c) for c in self.cuts[1:-1]]}
+
+    def settle(self, store: ParticleStore) -> None:
+        """Freshly seeded particles (in `slab`) to their owners: they are there already."""
+
     def owned_mask(self, x: np.ndarray) -> np.ndarray:
         c = x[:, self.axis]
         return (c >= self.lo) & (c < self.hi)

@@ -167,16 +167,21 @@ def _agree(comm, fn, *args, close=None):
 
 
 def read_restart(path: Path, comm, axis: int, min_width: float, chunk: int = CHUNK_ROWS,
-                 check: Callable[[dict], None] | None = None
-                 ) -> tuple[dict, np.ndarray, dict[str, np.ndarray], np.ndarray]:
+                 check: Callable[[dict], None] | None = None,
+                 boxes: tuple[int, tuple[int, int]] | None = None
+                 ) -> tuple[dict, np.ndarray | tuple, dict[str, np.ndarray], np.ndarray]:
     """Collective: (meta, slab cuts, this rank's particles, this rank's share of the
     removed ids) of the checkpoint `path`. Each rank reads the rows of its share of the
     file, `chunk` rows at a time; the cuts are `slab_cuts` of all positions along `axis`
     (`distributed_cuts`); each row is then sent to its owner, which keeps the file's
-    order. `check(meta)`, if given, runs before the rows are read (it may raise
+    order. With `boxes` = (a1, (n0, n1)) the owners are boxes along two axes
+    (`decomposition.boxes`) and the cuts (slab cuts, box cuts0, box cuts1).
+    `check(meta)`, if given, runs before the rows are read (it may raise
     SceneError on every rank). SceneError (exit 2, on every rank) if the file is unreadable
     on any rank."""
+    from psph.decomposition.boxes import box_cuts
     from psph.decomposition.slabs import distributed_cuts
+    from psph.kernels.packing import box_owners
 
     path = Path(path)
     where = f"--restart {path}"
@@ -192,10 +197,12 @@ def read_restart(path: Path, comm, axis: int, min_width: float, chunk: int = CHU
         n = meta["n_global"]
         lo, hi = rank * n // size, (rank + 1) * n // size
 
+        axes = [axis] if boxes is None else [axis, boxes[0]]
+
         def first_pass():
             try:
-                coords = np.concatenate([np.zeros(0)] + [
-                    f["particles"]["x"][a:min(a + chunk, hi), axis]
+                coords = np.concatenate([np.zeros((0, len(axes)))] + [
+                    f["particles"]["x"][a:min(a + chunk, hi)][:, axes]
                     for a in range(lo, hi, chunk)])
                 r_rows = f["alive"].shape[0] if "alive" in f else meta["n_removed"]
                 removed = _removed_rows(f, rank * r_rows // size, (rank + 1) * r_rows // size)
@@ -208,8 +215,14 @@ def read_restart(path: Path, comm, axis: int, min_width: float, chunk: int = CHU
         if n_removed != meta["n_removed"]:
             raise SceneError(f"{where}: corrupt checkpoint ({meta['n_ids'] - n_removed} "
                              f"ids alive, {n} particles)")
-        cuts = distributed_cuts(coords, size, min_width, comm)
-        dest = np.searchsorted(cuts[1:-1], coords, side="right")
+        cuts = distributed_cuts(coords[:, 0], size, min_width, comm)
+        if boxes is None:
+            dest = np.searchsorted(cuts[1:-1], coords[:, 0], side="right")
+        else:
+            cuts0, cuts1 = box_cuts(comm, coords[:, 0], coords[:, 1], boxes[1])
+            dest = np.zeros(len(coords), np.int64)
+            box_owners(np.ascontiguousarray(coords), len(coords), 0, 1, cuts0, cuts1, dest)
+            cuts = (cuts, cuts0, cuts1)
         del coords
         particles = _to_owners(f, comm, dest, lo, chunk, unreadable)
     finally:

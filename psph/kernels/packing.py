@@ -5,6 +5,7 @@ Fields are passed as a tuple of 2D float64 arrays (cap, ncomp); scalar fields ar
 """
 
 import numba as nb
+import numpy as np
 
 
 @nb.njit(cache=True)
@@ -59,3 +60,43 @@ def select_slab_rows(coord, n, lo, hi, width, is_first, is_last, migr_down, migr
                 halo_up[nhu] = i
                 nhu += 1
     return nmd, nmu, nhd, nhu, nk
+
+
+@nb.njit(cache=True)
+def box_owners(x, n, a0, a1, cuts0, cuts1, owner):
+    """owner[i] = the rank of the box holding row i < n of a two-axis layout: slab s
+    along axis a0 (cuts0, (n0 + 1,), outer cuts -inf and +inf), then box b of that slab
+    along a1 (cuts1[s], (n1 + 1,)); rank = s n1 + b."""
+    n1 = cuts1.shape[1] - 1
+    for i in range(n):
+        s = np.searchsorted(cuts0[1:-1], x[i, a0], side="right")
+        b = np.searchsorted(cuts1[s, 1:-1], x[i, a1], side="right")
+        owner[i] = s * n1 + b
+
+
+@nb.njit(cache=True)
+def box_halo(x, n, a0, a1, cuts0, cuts1, width, me, dest, rows):
+    """The halo of rows 0..n-1 (all owned by rank `me`) in a two-axis layout
+    (`box_owners`): each (rank, row) with the row within `width` of that rank's box along
+    both axes (edges and corners included), rank != me, in dest[:m], rows[:m] in row
+    order. Returns m, or -m if dest is too short."""
+    n1 = cuts1.shape[1] - 1
+    m = 0
+    cap = dest.shape[0]
+    for i in range(n):
+        c0 = x[i, a0]
+        c1 = x[i, a1]
+        s_lo = np.searchsorted(cuts0[1:-1], c0 - width, side="right")
+        s_hi = np.searchsorted(cuts0[1:-1], c0 + width, side="right")
+        for s in range(s_lo, s_hi + 1):
+            b_lo = np.searchsorted(cuts1[s, 1:-1], c1 - width, side="right")
+            b_hi = np.searchsorted(cuts1[s, 1:-1], c1 + width, side="right")
+            for b in range(b_lo, b_hi + 1):
+                r = s * n1 + b
+                if r == me:
+                    continue
+                if m < cap:
+                    dest[m] = r
+                    rows[m] = i
+                m += 1
+    return m if m <= cap else -m

@@ -113,13 +113,17 @@ class BoundaryParticles:
         self.first = 0
         self.n = 0
 
-    def select(self, axis: int, lo: float, hi: float) -> None:
-        """The boundary particles within [lo - 4h, hi + 4h] along the slab axis."""
-        if self._slab != (axis, lo, hi):
-            c = self.x[:, axis]
-            self._slab_src = np.flatnonzero((c >= lo - self.width) & (c <= hi + self.width))
+    def select(self, region: tuple[tuple[int, float, float], ...]) -> None:
+        """The boundary particles within [lo - 4h, hi + 4h] along each (axis, lo, hi) of
+        this rank's `region` (a slab's one axis, a box's two)."""
+        if self._slab != region:
+            inside = np.ones(len(self.x), bool)
+            for axis, lo, hi in region:
+                c = self.x[:, axis]
+                inside &= (c >= lo - self.width) & (c <= hi + self.width)
+            self._slab_src = np.flatnonzero(inside)
             self.src = np.zeros(len(self._slab_src), np.int64)
-            self._slab = (axis, lo, hi)
+            self._slab = region
 
     def append(self, store) -> bool:
         """Append the selected boundary particles' rows after the ghosts (x, key, volume;

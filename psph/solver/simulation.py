@@ -89,6 +89,7 @@ class Simulation(Stages):
         self.store.load(data)
         if fresh:
             self.store.u[:] = 0.0
+            slabs.settle(self.store)  # seeded in 1D slabs; boxes along two axes take them
 
         lo, hi = scene.domain.min, scene.domain.max
         walls = plane_walls(scene.boundaries, lo, hi)

@@ -94,7 +94,7 @@ class Stages:
 
     def _boundary_rows(self) -> None:
         """Rows of the boundary particles near this slab, after the ghosts."""
-        self.wall_particles.select(*self.slabs.slab)
+        self.wall_particles.select(self.slabs.region)
         while not self.wall_particles.append(self.store):
             if len(self.wall_axis):  # the store grew: ghosts again (v_slip was reset)
                 self._ghosts()

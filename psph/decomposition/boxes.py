@@ -1,0 +1,245 @@
+"""Boxes along two axes (issue 38): the domain cut into n0 slabs along axis a0, each slab
+cut into n1 boxes along a1, one box a rank (rank = slab n1 + box). The cuts are a
+recursive coordinate bisection of the particles: slabs of equal counts, then boxes of
+equal counts within each slab (`balance.balanced_cuts`), so the boxes of neighbouring
+slabs need not line up.
+
+A slab's halo is a whole cross-section of the domain and does not shrink as ranks are
+added; a box's halo is its perimeter's (the scaling model, `bench/performance/
+scaling_model_3d.py`). `choose_layout` picks n0 x n1 from the rank count and the
+particles' extent; `decomposition.cuts` forces slabs or boxes.
+
+Every step, `exchange` moves the particles that left their box to its owner (one
+all-to-all), then sends each owned particle within `width` of another rank's box (its
+faces, edges and corners) to that rank as halo (a second all-to-all); `refresh_halo`
+repeats the second with fresh values. Any rank may be a particle's new owner or a halo
+destination, so no box needs a minimum width. A fresh run seeds its particles in the 1D
+slabs of `Slabs` (the lattice's ids are counted over disjoint slabs in rank order) and
+`settle` moves them to their boxes.
+"""
+
+import numpy as np
+from mpi4py import MPI
+
+from psph.decomposition.balance import balanced_cuts
+from psph.decomposition.slabs import Slabs, _compact
+from psph.kernels.packing import box_halo, box_owners, pack_rows, unpack_rows
+from psph.state.particles import ParticleStore
+
+
+def halo_faces(n: int) -> int:
+    """Faces of an inner box along an axis cut into n: 0, 1 (two parts) or 2."""
+    return min(n - 1, 2)
+
+
+def choose_layout(extent, size: int, cuts: str) -> tuple[int, int] | None:
+    """(n0, n1): n0 slabs along a0, each cut in n1 boxes along a1, n0 n1 = size. "auto"
+    takes, of the slabs (size, 1) and the factorisations with n0, n1 > 1, the one with
+    the least halo on its busiest rank, w L2 (f0 L1 / n1 + f1 L0 / n0) for boxes L0 / n0
+    x L1 / n1 with f the inner faces along each axis (`halo_faces`; slabs on a tie);
+    "slabs" is (size, 1); "boxes" the least-halo factorisation with n0, n1 > 1 (None if
+    the rank count has no such factors; one rank is one box). extent: the particles'
+    extents (L0, L1) along (a0, a1)."""
+    if cuts == "slabs" or size == 1:
+        return size, 1
+    l0, l1 = float(extent[0]), float(extent[1])
+    best, best_cost = None, np.inf
+    if cuts == "auto":
+        best, best_cost = (size, 1), halo_faces(size) * l1
+    for n1 in range(2, size // 2 + 1):
+        if size % n1:
+            continue
+        n0 = size // n1
+        cost = halo_faces(n0) * l1 / n1 + halo_faces(n1) * l0 / n0
+        if cost < best_cost * (1 - 1e-9):
+            best, best_cost = (n0, n1), cost
+    return best
+
+
+def box_cuts(comm, c0: np.ndarray, c1: np.ndarray, shape: tuple[int, int]
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """(cuts0 (n0 + 1,), cuts1 (n0, n1 + 1)) of every rank's points (c0, c1) along the two
+    axes: slabs of equal counts along a0, then boxes of equal counts in each (collective;
+    the outer cuts -inf and +inf)."""
+    n0, n1 = shape
+    cuts0 = balanced_cuts(comm, c0, 0.0, parts=n0)
+    slab = np.searchsorted(cuts0[1:-1], c0, side="right")
+    cuts1 = np.stack([balanced_cuts(comm, c1[slab == s], 0.0, parts=n1) for s in range(n0)])
+    return cuts0, cuts1
+
+
+class Boxes(Slabs):
+    """Boxes along two axes, one a rank (module docstring). `seed_cuts`: the 1D slabs
+    along axes[0] over all ranks in which a fresh run seeds its particles (`slab`);
+    `cuts0`, `cuts1`: the boxes, if known (a restart's), else set by `settle`."""
+
+    def __init__(self, axes: tuple[int, int], shape: tuple[int, int], seed_cuts: np.ndarray,
+                 comm=None, cuts0: np.ndarray | None = None, cuts1: np.ndarray | None = None):
+        super().__init__(axes[0], seed_cuts, comm)
+        self.axes = (int(axes[0]), int(axes[1]))
+        self.shape = (int(shape[0]), int(shape[1]))
+        if self.shape[0] * self.shape[1] != self.size:
+            raise ValueError(f"layout {self.shape} for {self.size} ranks")
+        self._owner = np.zeros(0, np.int64)
+        self._dest = np.zeros(0, np.int64)
+        self._rows = np.zeros(0, np.int64)
+        self._halo = None  # the last exchange's halo plan (`refresh_halo`)
+        if cuts0 is not None:
+            self.set_boxes(cuts0, cuts1)
+
+    def set_boxes(self, cuts0: np.ndarray, cuts1: np.ndarray) -> None:
+        self.cuts0 = np.ascontiguousarray(cuts0, float)
+        self.cuts1 = np.ascontiguousarray(cuts1, float)
+        s, b = divmod(self.rank, self.shape[1])
+        self.box = ((self.axes[0], float(self.cuts0[s]), float(self.cuts0[s + 1])),
+                    (self.axes[1], float(self.cuts1[s, b]), float(self.cuts1[s, b + 1])))
+
+    @property
+    def region(self) -> tuple[tuple[int, float, float], ...]:
+        """This rank's box as (axis, lo, hi) along each cut axis."""
+        return self.box
+
+    def describe(self) -> dict:
+        return {"layout": "boxes", "shape": list(self.shape), "axes": list(self.axes),
+                "cuts0": [float(c) for c in self.cuts0[1:-1]],
+                "cuts1": [[float(c) for c in row[1:-1]] for row in self.cuts1]}
+
+    def owned_mask(self, x: np.ndarray) -> np.ndarray:
+        mask = np.ones(len(x), bool)
+        for axis, lo, hi in self.box:
+            mask &= (x[:, axis] >= lo) & (x[:, axis] < hi)
+        return mask
+
+    # --------------------------------------------------------------- moving rows
+
+    def _owners(self, store: ParticleStore) -> np.ndarray:
+        n = store.n_owned
+        if self._owner.shape[0] < n:
+            self._owner = np.zeros(n + n // 2 + 64, np.int64)
+        box_owners(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1,
+                   self._owner)
+        return self._owner[:n]
+
+    def _alltoall_rows(self, store: ParticleStore, rows: np.ndarray, dest: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray]:
+        """Send store rows `rows` to ranks `dest` (any order: sent by rank, in row order
+        within a rank); returns the received rows (n, width) in source-rank order and the
+        counts received from each rank. Collective."""
+        order = np.argsort(dest, kind="stable")
+        send_counts = np.bincount(dest, minlength=self.size).astype(np.int64)
+        w = store.row_width
+        send = self._send_buffer("boxes_send", len(rows), w)
+        pack_rows(store.all_rows, rows[order], len(rows), send)
+        recv_counts = np.zeros(self.size, np.int64)
+        self.comm.Alltoall(send_counts, recv_counts)
+        n_in = int(recv_counts.sum())
+        recv = self._send_buffer("boxes_recv", n_in, w)
+        self.comm.Alltoallv([send, (send_counts * w, _displacements(send_counts) * w),
+                             MPI.DOUBLE],
+                            [recv, (recv_counts * w, _displacements(recv_counts) * w),
+                             MPI.DOUBLE])
+        return recv[:n_in], recv_counts
+
+    def _migrate(self, store: ParticleStore, owner: np.ndarray) -> None:
+        """The owned rows whose `owner` is another rank go there; the rest stay in order,
+        the received ones follow them as owned. Collective."""
+        leave = owner != self.rank
+        rows = np.flatnonzero(leave)
+        recv, _ = self._alltoall_rows(store, rows, owner[leave])
+        if len(rows):
+            keep = np.flatnonzero(~leave)
+            _compact(store, keep, len(keep))
+            store.n_owned = len(keep)
+        store.ensure(store.n_owned + len(recv) + 64)
+        unpack_rows(recv, len(recv), store.all_rows, store.n_owned)
+        store.n_owned += len(recv)
+
+    def settle(self, store: ParticleStore) -> None:
+        """Fresh particles, seeded in the 1D slabs of `slab`, to their boxes: the box cuts
+        from their distribution, then one all-to-all. Collective."""
+        self._recut(store)
+        self.redistribute(store)
+
+    def _recut(self, store: ParticleStore) -> None:
+        x = store.x[:store.n_owned]
+        self.set_boxes(*box_cuts(self.comm, x[:, self.axes[0]], x[:, self.axes[1]],
+                                 self.shape))
+
+    def redistribute(self, store: ParticleStore) -> None:
+        """Every owned particle to the rank whose box holds it (any distance); halo and
+        ghost rows are dropped with the halo plan. Collective."""
+        store.n_halo = store.n_ghost = 0
+        self._halo = None
+        if self.size == 1:
+            return
+        self._migrate(store, self._owners(store))
+
+    def rebalance(self, store: ParticleStore, min_width: float, threshold: float) -> bool:
+        """Recut the boxes (slabs, then boxes in each) and move every particle to its new
+        owner when the imbalance exceeds `threshold`. Collective; True if recut."""
+        if self.size == 1 or self.imbalance(store) <= threshold:
+            return False
+        self._recut(store)
+        self.redistribute(store)
+        self.rebalances += 1
+        self.max_after_recut = max(self.max_after_recut, self.imbalance(store))
+        return True
+
+    # --------------------------------------------------------------- per step
+
+    def exchange(self, store: ParticleStore, width: float) -> None:
+        """Migration to the owners, then the halo: every owned row within `width` of
+        another rank's box, appended there after its owned rows (module docstring)."""
+        store.n_halo = store.n_ghost = 0
+        if self.size == 1:
+            return
+        self._migrate(store, self._owners(store))
+        n = store.n_owned
+        while True:
+            m = box_halo(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1,
+                         width, self.rank, self._dest, self._rows)
+            if m >= 0:
+                break
+            self._dest = np.zeros(-m + (-m) // 2 + 64, np.int64)
+            self._rows = np.zeros(self._dest.shape[0], np.int64)
+        dest = self._dest[:m]
+        order = np.argsort(dest, kind="stable")
+        send_rows = self._rows[:m][order]
+        recv, recv_counts = self._alltoall_rows(store, self._rows[:m], dest)
+        store.ensure(n + len(recv) + 64)
+        unpack_rows(recv, len(recv), store.all_rows, n)
+        store.n_halo = len(recv)
+        send_counts = np.bincount(dest, minlength=self.size).astype(np.int64)
+        self._halo = (send_rows, send_counts, recv_counts, n)
+
+    def refresh_halo(self, *fields: np.ndarray) -> None:
+        """Overwrite the halo rows of each field ((cap,) or (cap, k)) with the owners'
+        current values, for the halo of the last `exchange` (no particle has moved since):
+        one all-to-all for all the fields."""
+        if self.size == 1:
+            return
+        send_rows, send_counts, recv_counts, first = self._halo
+        cols = [f if f.ndim == 2 else f[:, None] for f in fields]
+        widths = [c.shape[1] for c in cols]
+        width = sum(widths)
+        n_out, n_in = len(send_rows), int(recv_counts.sum())
+        sbuf = self._send_buffer("boxes_refresh", n_out, width)[:n_out]
+        j = 0
+        for c, w in zip(cols, widths, strict=True):
+            np.take(c, send_rows, axis=0, out=sbuf[:, j:j + w])
+            j += w
+        rbuf = self._send_buffer("boxes_refresh_in", n_in, width)[:n_in]
+        self.comm.Alltoallv(
+            [sbuf, (send_counts * width, _displacements(send_counts) * width), MPI.DOUBLE],
+            [rbuf, (recv_counts * width, _displacements(recv_counts) * width), MPI.DOUBLE])
+        j = 0
+        for c, w in zip(cols, widths, strict=True):
+            c[first:first + n_in] = rbuf[:, j:j + w]
+            j += w
+
+    def _refresh_one(self, field: np.ndarray) -> None:
+        self.refresh_halo(field)
+
+
+def _displacements(counts: np.ndarray) -> np.ndarray:
+    return np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64)
