@@ -133,3 +133,23 @@ def test_boxes_hold_less_halo_than_slabs_on_a_3d_block(tmp_path):
         assert sum(d["owned_per_rank"]) == 8000
         halo[cuts] = max(d["halo_rows_per_rank"])
     assert halo["boxes"] < 0.75 * halo["slabs"], halo
+
+
+def test_boxes_forced_on_two_ranks_is_bad_input(tmp_path):
+    """Two ranks have no factors n0 x n1 above 1: exit 2 naming the key, nothing written."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
+               OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1")
+    out = tmp_path / "out"
+    r = subprocess.run(["mpirun", "-n", "2", sys.executable, "-m", "psph", "run", "collapse_3d",
+                        "--out", str(out), "--set", "decomposition.cuts='boxes'"], env=env,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2, r.stderr[-2000:]
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("psph: error")]
+    assert lines and all("decomposition.cuts = 'boxes': 2 ranks have no factors" in ln
+                         for ln in lines), r.stderr[-2000:]
+    assert "Traceback" not in r.stderr and not out.exists()

@@ -98,7 +98,9 @@ def measure_step(text: str, steps: int, warm: int = 3) -> None:
     from psph.solver.simulation import Simulation
 
     comm = MPI.COMM_WORLD
-    scene = resolve(validate(tomllib.loads(text)))
+    data = tomllib.loads(text)
+    data.setdefault("decomposition", {})["cuts"] = "slabs"  # the model's slabs, measured
+    scene = resolve(validate(data))
     sim = Simulation(scene, make_slabs(scene, comm))
     for _ in range(warm):
         sim.advance_one()

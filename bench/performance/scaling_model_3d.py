@@ -21,8 +21,10 @@ and received from its n_P neighbours:
 
 The field domain modelled: a hillslope block L x W x H = 8 : 4 : 1 (e.g. 160 x 80 x 20 m,
 `slope_3d`'s shape), N = 10^7 and 10^8 particles, on the cluster network of
-`scaling_model.CLUSTER` (stated assumptions). Two-axis decomposition is not in psph yet:
-its rows are the model's prediction only.
+`scaling_model.CLUSTER` (stated assumptions). The measured 4-rank rows are slabs (the
+workers force `decomposition.cuts = "slabs"`); psph's boxes along two axes
+(`decomposition/boxes.py`) are measured against slabs on 4 ranks by `halo_layouts.py`;
+at cluster scale the two-axis rows are the model's prediction.
 
     python bench/performance/scaling_model_3d.py              # measures (~40 s), models
     python bench/performance/scaling_model_3d.py --model-only  # from the JSON

@@ -75,7 +75,8 @@ def box_layout(scene: Scene, size: int, reducer, census_axis=None
     the initial particles' extents from the lattice's census). SceneError for
     `decomposition.cuts = "boxes"` on a rank count without two factors > 1."""
     mode = scene.decomposition.cuts
-    if mode == "slabs" or size == 1:
+    if mode == "slabs" or size == 1 or (mode == "auto" and choose_layout(
+            (1.0, 1.0), size, "boxes") is None):  # no two factors > 1: slabs
         return None
     axis = _slab_axis(scene)
     ext = np.zeros(scene.dim)
