@@ -73,13 +73,15 @@ def test_3d_boxes_on_four_ranks_equal_one_rank_and_restart_on_two(tmp_path):
     a quarter column collapsing on a surface floor (boundary particles, rebalances; 2 x 2
     along x and y, the auto layout's choice): 4 ranks equal 1 rank bit for bit, with the
     same CG iterations; the column's checkpoint written on 4 ranks mid-run and restarted
-    on 2 (slabs) continues the same bits."""
+    on 2 (slabs), and its 1-rank checkpoint restarted on 4 (boxes), continue the same
+    bits."""
     from mpi4py import MPI
 
     column = COLUMN_3D + ["decomposition.cuts='boxes'"]
-    run(load_scene("terzaghi_3d", column), tmp_path / "one", comm=MPI.COMM_SELF, quiet=True)
-    _mpirun_scene(4, "terzaghi_3d", tmp_path / "four", column + [
-        "checkpoint.every=200", "checkpoint.at_end=false"])
+    mid = ["checkpoint.every=200", "checkpoint.at_end=false"]
+    run(load_scene("terzaghi_3d", column + mid), tmp_path / "one", comm=MPI.COMM_SELF,
+        quiet=True)
+    _mpirun_scene(4, "terzaghi_3d", tmp_path / "four", column + mid)
     assert compare_runs(tmp_path / "one" / "particles.h5",
                         tmp_path / "four" / "particles.h5") is None
     four = _summary(tmp_path / "four")
@@ -92,6 +94,12 @@ def test_3d_boxes_on_four_ranks_equal_one_rank_and_restart_on_two(tmp_path):
     assert _summary(tmp_path / "four_two")["restarted_from"]
     assert compare_runs(tmp_path / "one" / "particles.h5",
                         tmp_path / "four_two" / "particles.h5") is None
+    shutil.copytree(tmp_path / "one", tmp_path / "one_four")  # and from 1 rank onto boxes
+    _mpirun_scene(4, "terzaghi_3d", tmp_path / "one_four", column,
+                  restart=tmp_path / "one_four" / "checkpoint.h5")
+    assert _summary(tmp_path / "one_four")["decomposition"]["shape"] == [2, 2]
+    assert compare_runs(tmp_path / "one" / "particles.h5",
+                        tmp_path / "one_four" / "particles.h5") is None
 
     collapse = ["particles.dx=0.1", "time.end=0.1", "output.interval=0.05"]
     run(load_scene("collapse_3d", collapse), tmp_path / "c_one", comm=MPI.COMM_SELF,

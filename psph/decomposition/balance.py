@@ -24,6 +24,8 @@ def balanced_cuts(comm, coord: np.ndarray, min_width: float, iterations: int = 6
         return cuts
     c = np.sort(coord)
     n_total = comm.allreduce(len(c), op=MPI.SUM)
+    if n_total == 0:  # nothing to cut (an empty slab of boxes): the first part takes all
+        return cuts
     lo = comm.allreduce(float(c[0]) if len(c) else np.inf, op=MPI.MIN)
     hi = comm.allreduce(float(c[-1]) if len(c) else -np.inf, op=MPI.MAX)
     target = np.array([r * n_total // size for r in range(1, size)], np.int64)

@@ -84,6 +84,9 @@ class Boxes(Slabs):
         self._dest = np.zeros(0, np.int64)
         self._rows = np.zeros(0, np.int64)
         self._halo = None  # the last exchange's halo plan (`refresh_halo`)
+        # until `settle` cuts the boxes, this rank's part is its seed slab
+        self.cuts0 = self.cuts1 = None
+        self.box = (self.slab,)
         if cuts0 is not None:
             self.set_boxes(cuts0, cuts1)
 
@@ -100,9 +103,12 @@ class Boxes(Slabs):
         return self.box
 
     def describe(self) -> dict:
+        """The layout for summary.json (a cut at infinity, of an empty slab, as None)."""
+        def finite(cuts):
+            return [float(c) if np.isfinite(c) else None for c in cuts[1:-1]]
+
         return {"layout": "boxes", "shape": list(self.shape), "axes": list(self.axes),
-                "cuts0": [float(c) for c in self.cuts0[1:-1]],
-                "cuts1": [[float(c) for c in row[1:-1]] for row in self.cuts1]}
+                "cuts0": finite(self.cuts0), "cuts1": [finite(row) for row in self.cuts1]}
 
     def owned_mask(self, x: np.ndarray) -> np.ndarray:
         mask = np.ones(len(x), bool)
@@ -120,32 +126,36 @@ class Boxes(Slabs):
                    self._owner)
         return self._owner[:n]
 
-    def _alltoall_rows(self, store: ParticleStore, rows: np.ndarray, dest: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray]:
+    def _alltoall_rows(self, store: ParticleStore, rows: np.ndarray, dest: np.ndarray,
+                       kept: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Send store rows `rows` to ranks `dest` (any order: sent by rank, in row order
         within a rank); returns the received rows (n, width) in source-rank order and the
-        counts received from each rank. Collective."""
+        counts received from each rank. Collective. `kept`: the message buffers are kept
+        for the next step's (the per-step exchange); a recut's, whose messages may hold
+        most of the rank's rows, are temporaries."""
         order = np.argsort(dest, kind="stable")
         send_counts = np.bincount(dest, minlength=self.size).astype(np.int64)
         w = store.row_width
-        send = self._send_buffer("boxes_send", len(rows), w)
+        send = self._send_buffer("boxes_send", len(rows), w) if kept else \
+            np.empty((max(len(rows), 1), w))
         pack_rows(store.all_rows, rows[order], len(rows), send)
         recv_counts = np.zeros(self.size, np.int64)
         self.comm.Alltoall(send_counts, recv_counts)
         n_in = int(recv_counts.sum())
-        recv = self._send_buffer("boxes_recv", n_in, w)
+        recv = self._send_buffer("boxes_recv", n_in, w) if kept else \
+            np.empty((max(n_in, 1), w))
         self.comm.Alltoallv([send, (send_counts * w, _displacements(send_counts) * w),
                              MPI.DOUBLE],
                             [recv, (recv_counts * w, _displacements(recv_counts) * w),
                              MPI.DOUBLE])
         return recv[:n_in], recv_counts
 
-    def _migrate(self, store: ParticleStore, owner: np.ndarray) -> None:
+    def _migrate(self, store: ParticleStore, owner: np.ndarray, kept: bool = True) -> None:
         """The owned rows whose `owner` is another rank go there; the rest stay in order,
         the received ones follow them as owned. Collective."""
         leave = owner != self.rank
         rows = np.flatnonzero(leave)
-        recv, _ = self._alltoall_rows(store, rows, owner[leave])
+        recv, _ = self._alltoall_rows(store, rows, owner[leave], kept)
         if len(rows):
             keep = np.flatnonzero(~leave)
             _compact(store, keep, len(keep))
@@ -172,7 +182,7 @@ class Boxes(Slabs):
         self._halo = None
         if self.size == 1:
             return
-        self._migrate(store, self._owners(store))
+        self._migrate(store, self._owners(store), kept=False)
 
     def rebalance(self, store: ParticleStore, min_width: float, threshold: float) -> bool:
         """Recut the boxes (slabs, then boxes in each) and move every particle to its new
@@ -229,9 +239,16 @@ class Boxes(Slabs):
             np.take(c, send_rows, axis=0, out=sbuf[:, j:j + w])
             j += w
         rbuf = self._send_buffer("boxes_refresh_in", n_in, width)[:n_in]
-        self.comm.Alltoallv(
-            [sbuf, (send_counts * width, _displacements(send_counts) * width), MPI.DOUBLE],
-            [rbuf, (recv_counts * width, _displacements(recv_counts) * width), MPI.DOUBLE])
+        # messages to and from the ranks this one shares a halo with only (a CG solve
+        # refreshes every iteration: no all-to-all over every rank)
+        reqs = []
+        at = _displacements(recv_counts)
+        for r in np.flatnonzero(recv_counts):
+            reqs.append(self.comm.Irecv(rbuf[at[r]:at[r] + recv_counts[r]], source=r, tag=31))
+        at = _displacements(send_counts)
+        for r in np.flatnonzero(send_counts):
+            reqs.append(self.comm.Isend(sbuf[at[r]:at[r] + send_counts[r]], dest=r, tag=31))
+        MPI.Request.Waitall(reqs)
         j = 0
         for c, w in zip(cols, widths, strict=True):
             c[first:first + n_in] = rbuf[:, j:j + w]
