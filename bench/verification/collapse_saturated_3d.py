@@ -18,39 +18,24 @@ of |excess| against time, 2D lines, 3D markers).
 
 import argparse
 import json
-import os
 import platform
-import subprocess
 import sys
 import tomllib
 from datetime import date
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "bench" / "tools"))
+from scene_runs import run_scene  # noqa: E402
+
 OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "collapse_saturated_3d"
-MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
-           "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "NUMBA_NUM_THREADS": "1"}
 PSIS = ("-5", "0", "2.5")
 BAR = 0.05
 
 
 def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
-    summary = out / "summary.json"
-    if reuse and summary.is_file() and json.loads(summary.read_text())["status"] == "finished":
-        return json.loads(summary.read_text())
-    cmd = [sys.executable, "-m", "psph", "run", scene, "--out", str(out), "--quiet"]
-    for s in settings:
-        cmd += ["--set", s]
-    if ranks > 1:
-        cmd = ["mpirun", "-n", str(ranks)] + cmd
-    print("  " + " ".join(cmd[cmd.index("psph") - 2:] if ranks == 1 else cmd), flush=True)
-    r = subprocess.run(cmd, cwd=ROOT, env={**os.environ, **MPI_ENV}, capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
-    return json.loads(summary.read_text())
+    return run_scene(out, scene, ranks, settings, reuse)
 
 
 def plasticity_settings(psi: str) -> list[str]:

@@ -22,7 +22,6 @@ writes bench/out/slope_3d.json and .png (back scarp and run-out against time: 2D
 
 import argparse
 import json
-import os
 import platform
 import subprocess
 import sys
@@ -30,11 +29,11 @@ from datetime import date
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "bench" / "tools"))
+from scene_runs import run_scene  # noqa: E402
+
 OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "slope_3d"
-MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
-           "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "NUMBA_NUM_THREADS": "1"}
 DX, DT = 1.0, 1.0e-3
 RUNOUT_BAR = 0.05
 SLAB = [f"domain.max=[1000.0, {5 * DX}, 40.0]",
@@ -43,21 +42,7 @@ SLAB = [f"domain.max=[1000.0, {5 * DX}, 40.0]",
 
 
 def run(name: str, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
-    out = RUNS / name
-    summary = out / "summary.json"
-    if reuse and summary.is_file() and json.loads(summary.read_text())["status"] == "finished":
-        return json.loads(summary.read_text())
-    cmd = [sys.executable, "-m", "psph", "run", scene, "--out", str(out), "--quiet"]
-    for s in settings:
-        cmd += ["--set", s]
-    if ranks > 1:
-        cmd = ["mpirun", "-n", str(ranks)] + cmd
-    print("  " + " ".join(cmd), flush=True)
-    r = subprocess.run(cmd, cwd=ROOT, env={**os.environ, **MPI_ENV}, capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
-    return json.loads(summary.read_text())
+    return run_scene(RUNS / name, scene, ranks, settings, reuse)
 
 
 def slides(s: dict) -> dict:
