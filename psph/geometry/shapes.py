@@ -122,7 +122,7 @@ def removal_region(x: np.ndarray, region, dx: float, reducer) -> np.ndarray:
     span = np.ptp(np.asarray(region.polygon, float), axis=0)
     shape = (np.floor(span / dx).astype(np.int64) + 1)
     col = np.floor((x[inside, :2] - lo) / dx).astype(np.int64)
-    col = np.minimum(col, shape - 1)
+    col = np.clip(col, 0, shape - 1)  # a point on the polygon's edge: its edge column
     flat = col[:, 1] * shape[0] + col[:, 0]
     top = np.full(int(shape[0] * shape[1]), -np.inf)
     np.maximum.at(top, flat, x[inside, 2])
