@@ -15,7 +15,13 @@ import pytest
 from psph.app.run import run
 from psph.config.load import load_scene
 from psph.decomposition.boxes import choose_layout
-from psph.kernels.packing import box_halo, box_owners
+from psph.kernels.packing import (
+    box_halo,
+    box_owners,
+    compact_rows,
+    group_by_rank,
+    split_by_owner,
+)
 from tests.helpers import compare_runs
 from tests.test_mpi_3d import COLUMN_3D
 from tests.test_rank_counts import _mpirun_scene
@@ -62,6 +68,30 @@ def test_box_owners_and_halo_match_a_brute_force_search():
     want = {(r, i) for r in range(6) if r != me for i in range(len(xs))
             if np.all((cm[i] >= lo[r] - width) & (cm[i] < hi[r] + width))}
     assert got == want and m == len(want) and len(want) > 0
+
+
+
+def test_row_moves_match_numpy():
+    """The migration's kernels against their numpy forms: the split by owner
+    (flatnonzero), the counting sort by rank (a stable argsort and a bincount) and the
+    in-place compaction (fancy indexing)."""
+    rng = np.random.default_rng(7)
+    owner = rng.integers(0, 5, 300)
+    keep, leave, dest = (np.zeros(300, np.int64) for _ in range(3))
+    nk, nl = split_by_owner(owner, 300, 2, keep, leave, dest)
+    assert np.array_equal(keep[:nk], np.flatnonzero(owner == 2))
+    assert np.array_equal(leave[:nl], np.flatnonzero(owner != 2))
+    assert np.array_equal(dest[:nl], owner[owner != 2])
+    rows = rng.permutation(1000)[:nl]
+    counts, grouped = np.full(5, -1, np.int64), np.zeros(nl, np.int64)
+    group_by_rank(dest, rows, nl, counts, grouped)
+    assert np.array_equal(grouped, rows[np.argsort(dest[:nl], kind="stable")])
+    assert np.array_equal(counts, np.bincount(dest[:nl], minlength=5))
+    fields = (rng.normal(size=(300, 3)), rng.normal(size=(300, 1)))
+    want = [f[keep[:nk]].copy() for f in fields]
+    compact_rows(fields, keep, nk)
+    for f, w in zip(fields, want, strict=True):
+        assert np.array_equal(f[:nk], w)
 
 
 def _summary(out) -> dict:

@@ -22,8 +22,16 @@ import numpy as np
 from mpi4py import MPI
 
 from psph.decomposition.balance import balanced_cuts
-from psph.decomposition.slabs import Slabs, _compact
-from psph.kernels.packing import box_halo, box_owners, pack_rows, unpack_rows
+from psph.decomposition.slabs import Slabs
+from psph.kernels.packing import (
+    box_halo,
+    box_owners,
+    compact_rows,
+    group_by_rank,
+    pack_rows,
+    split_by_owner,
+    unpack_rows,
+)
 from psph.state.particles import ParticleStore
 
 
@@ -80,9 +88,11 @@ class Boxes(Slabs):
         self.shape = (int(shape[0]), int(shape[1]))
         if self.shape[0] * self.shape[1] != self.size:
             raise ValueError(f"layout {self.shape} for {self.size} ranks")
-        self._owner = np.zeros(0, np.int64)
-        self._dest = np.zeros(0, np.int64)
-        self._rows = np.zeros(0, np.int64)
+        # index buffers kept from step to step (`_rows_buffer`): no per-step allocation
+        # of particle- or halo-length arrays
+        self._ints: dict[str, np.ndarray] = {}
+        self._send_counts = np.zeros(self.size, np.int64)
+        self._recv_counts = np.zeros(self.size, np.int64)
         self._halo = None  # the last exchange's halo plan (`refresh_halo`)
         # until `settle` cuts the boxes, this rank's part is its seed slab
         self.cuts0 = self.cuts1 = None
@@ -118,28 +128,33 @@ class Boxes(Slabs):
 
     # --------------------------------------------------------------- moving rows
 
+    def _rows_buffer(self, name: str, n: int) -> np.ndarray:
+        """A kept int64 buffer of at least n entries, grown by half when short."""
+        buf = self._ints.get(name)
+        if buf is None or buf.shape[0] < n:
+            buf = np.zeros(n + n // 2 + 64, np.int64)
+            self._ints[name] = buf
+        return buf
+
     def _owners(self, store: ParticleStore) -> np.ndarray:
         n = store.n_owned
-        if self._owner.shape[0] < n:
-            self._owner = np.zeros(n + n // 2 + 64, np.int64)
-        box_owners(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1,
-                   self._owner)
-        return self._owner[:n]
+        owner = self._rows_buffer("owner", n)
+        box_owners(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1, owner)
+        return owner[:n]
 
-    def _alltoall_rows(self, store: ParticleStore, rows: np.ndarray, dest: np.ndarray,
+    def _alltoall_rows(self, store: ParticleStore, rows: np.ndarray, send_counts: np.ndarray,
                        kept: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """Send store rows `rows` to ranks `dest` (any order: sent by rank, in row order
-        within a rank); returns the received rows (n, width) in source-rank order and the
-        counts received from each rank. Collective. `kept`: the message buffers are kept
-        for the next step's (the per-step exchange); a recut's, whose messages may hold
-        most of the rank's rows, are temporaries."""
-        order = np.argsort(dest, kind="stable")
-        send_counts = np.bincount(dest, minlength=self.size).astype(np.int64)
+        """Send store rows `rows`, grouped by destination rank (`send_counts` of them to
+        each rank, in that order); returns the received rows (n, width) in source-rank
+        order and the counts received from each rank (a kept array: read it before the
+        next call). Collective. `kept`: the message buffers are kept for the next step's
+        (the per-step exchange); a recut's, whose messages may hold most of the rank's
+        rows, are temporaries."""
         w = store.row_width
         send = self._send_buffer("boxes_send", len(rows), w) if kept else \
             np.empty((max(len(rows), 1), w))
-        pack_rows(store.all_rows, rows[order], len(rows), send)
-        recv_counts = np.zeros(self.size, np.int64)
+        pack_rows(store.all_rows, rows, len(rows), send)
+        recv_counts = self._recv_counts
         self.comm.Alltoall(send_counts, recv_counts)
         n_in = int(recv_counts.sum())
         recv = self._send_buffer("boxes_recv", n_in, w) if kept else \
@@ -153,13 +168,17 @@ class Boxes(Slabs):
     def _migrate(self, store: ParticleStore, owner: np.ndarray, kept: bool = True) -> None:
         """The owned rows whose `owner` is another rank go there; the rest stay in order,
         the received ones follow them as owned. Collective."""
-        leave = owner != self.rank
-        rows = np.flatnonzero(leave)
-        recv, _ = self._alltoall_rows(store, rows, owner[leave], kept)
-        if len(rows):
-            keep = np.flatnonzero(~leave)
-            _compact(store, keep, len(keep))
-            store.n_owned = len(keep)
+        n = store.n_owned
+        keep = self._rows_buffer("keep", n)
+        leave = self._rows_buffer("leave", n)
+        leave_dest = self._rows_buffer("leave_dest", n)
+        nk, nl = split_by_owner(owner, n, self.rank, keep, leave, leave_dest)
+        grouped = self._rows_buffer("grouped", nl)
+        group_by_rank(leave_dest, leave, nl, self._send_counts, grouped)
+        recv, _ = self._alltoall_rows(store, grouped[:nl], self._send_counts, kept)
+        if nl:
+            compact_rows(store.all_rows, keep, nk)
+            store.n_owned = nk
         store.ensure(store.n_owned + len(recv) + 64)
         unpack_rows(recv, len(recv), store.all_rows, store.n_owned)
         store.n_owned += len(recv)
@@ -205,22 +224,24 @@ class Boxes(Slabs):
             return
         self._migrate(store, self._owners(store))
         n = store.n_owned
-        while True:
+        dest = self._rows_buffer("halo_dest", n)
+        rows = self._rows_buffer("halo_rows", n)
+        m = box_halo(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1, width,
+                     self.rank, dest, rows)
+        if m < 0:  # a row is halo for more than one box: grow and count again
+            dest = self._rows_buffer("halo_dest", -m)
+            rows = self._rows_buffer("halo_rows", -m)
             m = box_halo(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1,
-                         width, self.rank, self._dest, self._rows)
-            if m >= 0:
-                break
-            self._dest = np.zeros(-m + (-m) // 2 + 64, np.int64)
-            self._rows = np.zeros(self._dest.shape[0], np.int64)
-        dest = self._dest[:m]
-        order = np.argsort(dest, kind="stable")
-        send_rows = self._rows[:m][order]
-        recv, recv_counts = self._alltoall_rows(store, self._rows[:m], dest)
+                         width, self.rank, dest, rows)
+        # the halo plan is kept until the next exchange (`refresh_halo`): its own buffers
+        send_rows = self._rows_buffer("halo_send", m)[:m]
+        send_counts = self._rows_buffer("halo_counts", self.size)[:self.size]
+        group_by_rank(dest, rows, m, send_counts, send_rows)
+        recv, recv_counts = self._alltoall_rows(store, send_rows, send_counts)
         store.ensure(n + len(recv) + 64)
         unpack_rows(recv, len(recv), store.all_rows, n)
         store.n_halo = len(recv)
-        send_counts = np.bincount(dest, minlength=self.size).astype(np.int64)
-        self._halo = (send_rows, send_counts, recv_counts, n)
+        self._halo = (send_rows, send_counts, recv_counts.copy(), n)
 
     def refresh_halo(self, *fields: np.ndarray) -> None:
         """Overwrite the halo rows of each field ((cap,) or (cap, k)) with the owners'

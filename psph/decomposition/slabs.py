@@ -15,7 +15,7 @@ from mpi4py import MPI
 
 from psph.decomposition.balance import balanced_cuts
 from psph.kernels.exact_sum import exact_total
-from psph.kernels.packing import pack_rows, select_slab_rows, unpack_rows
+from psph.kernels.packing import compact_rows, pack_rows, select_slab_rows, unpack_rows
 from psph.state.particles import ParticleStore
 
 # parts of an expansion that `exact_sum` gathers in one fixed-size row (the chunk
@@ -248,7 +248,7 @@ class Slabs:
         pack_rows(store.all_rows, ix["mu"], nmu, own[nmd:nmd + nmu])
         n_own_migr = nmd + nmu
         if n_own_migr:
-            _compact(store, ix["keep"], nk)
+            compact_rows(store.all_rows, ix["keep"], nk)
         store.n_owned = nk
         # halo rows sent, as row indices after the compaction (for refresh_halo)
         if n_own_migr:
@@ -485,8 +485,3 @@ class Slabs:
 
     def any(self, flag: bool) -> bool:
         return bool(self.comm.allreduce(int(flag), op=MPI.MAX))
-
-
-def _compact(store: ParticleStore, keep: np.ndarray, nk: int) -> None:
-    for a in store.all_rows:
-        a[:nk] = a[keep[:nk]]

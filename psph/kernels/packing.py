@@ -32,6 +32,54 @@ def unpack_rows(buf, count, fields, start):
 
 
 @nb.njit(cache=True)
+def compact_rows(fields, keep, count):
+    """fields[f][r, :] = fields[f][keep[r], :] for r < count, in place; keep is increasing,
+    so no row is read after it is overwritten."""
+    for f in fields:
+        for r in range(count):
+            i = keep[r]
+            if i != r:
+                for c in range(f.shape[1]):
+                    f[r, c] = f[i, c]
+
+
+@nb.njit(cache=True)
+def split_by_owner(owner, n, me, keep, leave, leave_dest):
+    """Rows 0..n-1 by their owner rank: keep[:nk] those of rank `me`, leave[:nl] the others
+    with leave_dest[:nl] their owners, both in row order. Returns (nk, nl)."""
+    nk = nl = 0
+    for i in range(n):
+        r = owner[i]
+        if r == me:
+            keep[nk] = i
+            nk += 1
+        else:
+            leave[nl] = i
+            leave_dest[nl] = r
+            nl += 1
+    return nk, nl
+
+
+@nb.njit(cache=True)
+def group_by_rank(dest, rows, m, counts, grouped):
+    """A counting sort of rows[:m] by their ranks dest[:m] into grouped[:m], row order
+    kept within a rank (the order of rows[argsort(dest, kind="stable")]); counts[r] = how
+    many go to rank r."""
+    counts[:] = 0
+    for k in range(m):
+        counts[dest[k]] += 1
+    at = np.empty(counts.shape[0], np.int64)
+    total = 0
+    for r in range(counts.shape[0]):
+        at[r] = total
+        total += counts[r]
+    for k in range(m):
+        r = dest[k]
+        grouped[at[r]] = rows[k]
+        at[r] += 1
+
+
+@nb.njit(cache=True)
 def select_slab_rows(coord, n, lo, hi, width, is_first, is_last, migr_down, migr_up,
                      halo_down, halo_up, keep):
     """Classify owned particles 0..n-1 against the slab [lo, hi) along one axis.
