@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from psph.geometry.columns import column_tops
+
 MAX_POINTS = 60_000  # the perspective view draws at most this many particles
 
 
@@ -32,10 +34,8 @@ def deposit_thickness(x: np.ndarray, dx: float, base: float) -> tuple[np.ndarray
     """Thickness of the mass in each dx x dx column of the plan (top of the highest
     particle above `base`; NaN where the column is empty) and the grid's extent."""
     lo = x[:, :2].min(axis=0) - 0.5 * dx
-    idx = np.floor((x[:, :2] - lo) / dx).astype(np.int64)
-    shape = tuple(idx.max(axis=0) + 1)
-    top = np.full(shape, -np.inf)
-    np.maximum.at(top, (idx[:, 0], idx[:, 1]), x[:, 2] + 0.5 * dx)
+    shape = tuple(np.floor((x[:, :2] - lo) / dx).astype(np.int64).max(axis=0) + 1)
+    top = column_tops(x, lo, dx, shape, 0.5 * dx)
     thick = np.where(np.isfinite(top), top - base, np.nan)
     extent = (lo[0], lo[0] + shape[0] * dx, lo[1], lo[1] + shape[1] * dx)
     return thick, extent
@@ -94,10 +94,7 @@ def _save(fig, path: Path) -> Path:
 def surface_top(x: np.ndarray, dx: float, lo, shape, base: float) -> np.ndarray:
     """The surface (top particle + dx / 2) of each dx x dx plan column of the grid from
     `lo` with `shape` (nx, ny); `base` where the column is empty."""
-    idx = np.floor((x[:, :2] - lo) / dx).astype(np.int64)
-    idx = np.clip(idx, 0, np.array(shape) - 1)
-    top = np.full(shape, -np.inf)
-    np.maximum.at(top, (idx[:, 0], idx[:, 1]), x[:, 2] + 0.5 * dx)
+    top = column_tops(x, lo, dx, shape, 0.5 * dx)
     return np.where(np.isfinite(top), top, base)
 
 

@@ -3,6 +3,7 @@
 import numpy as np
 
 from psph.errors import SceneError
+from psph.geometry.columns import column_index, column_tops
 
 
 def lattice_block(lo, hi, dx: float) -> np.ndarray:
@@ -120,13 +121,9 @@ def removal_region(x: np.ndarray, region, dx: float, reducer) -> np.ndarray:
         return inside
     lo = np.min(np.asarray(region.polygon, float), axis=0)
     span = np.ptp(np.asarray(region.polygon, float), axis=0)
-    shape = (np.floor(span / dx).astype(np.int64) + 1)
-    col = np.floor((x[inside, :2] - lo) / dx).astype(np.int64)
-    col = np.clip(col, 0, shape - 1)  # a point on the polygon's edge: its edge column
-    flat = col[:, 1] * shape[0] + col[:, 0]
-    top = np.full(int(shape[0] * shape[1]), -np.inf)
-    np.maximum.at(top, flat, x[inside, 2])
-    top = reducer.max(top)
-    deep = x[inside, 2] < top[flat] - region.depth
+    shape = tuple(int(n) for n in np.floor(span / dx).astype(np.int64) + 1)
+    xin = x[inside]
+    top = reducer.max(column_tops(xin, lo, dx, shape))
+    deep = xin[:, 2] < top[column_index(xin, lo, dx, shape)] - region.depth
     inside[np.flatnonzero(inside)[deep]] = False
     return inside

@@ -23,6 +23,7 @@ import h5py
 import numpy as np
 from mpi4py import MPI
 
+from psph.geometry.columns import column_grid, column_index, column_tops
 from psph.verify.collapse import collapse_metrics, plane_strain_view, series_block, slides_from
 from psph.verify.distributed import exact_dot, read_share
 from psph.verify.pressure import DEBRIS_DX, pressure_quality_from, snapshot_quality
@@ -71,9 +72,9 @@ def plan_metrics(x: np.ndarray, u: np.ndarray, vol: np.ndarray, scene, h0: float
     width = mirror * float(np.sum(edges[1] - edges[0]))
     # the debris: moved more than DEBRIS_DX dx
     debris = np.linalg.norm(u, axis=1) > DEBRIS_DX * dx
-    shape = _plan_shape(lo, hi, dx)
+    shape = column_grid(lo, hi, dx)
     cover = np.zeros(shape, np.int8)
-    ix, iy = _plan_index(x[debris], lo, dx, shape)
+    ix, iy = column_index(x[debris], lo, dx, shape)
     cover[ix, iy] = 1
     comm.Allreduce(MPI.IN_PLACE, cover, op=MPI.MAX)
     area = mirror * dx * dx * float(cover.sum())
@@ -81,22 +82,10 @@ def plan_metrics(x: np.ndarray, u: np.ndarray, vol: np.ndarray, scene, h0: float
     return {"scarp_width_m": width, "footprint_area_m2": area, "debris_volume_m3": volume}
 
 
-def _plan_shape(lo, hi, c: float) -> tuple[int, int]:
-    return tuple(int(n) for n in np.maximum(np.ceil((hi - lo) / c), 1).astype(np.int64))
-
-
-def _plan_index(x: np.ndarray, lo, c: float, shape) -> tuple[np.ndarray, np.ndarray]:
-    """The (ix, iy) of the plan's c x c columns holding x (clipped to the grid)."""
-    idx = np.floor((x[:, :2] - lo) / c).astype(np.int64)
-    return (np.clip(idx[:, 0], 0, shape[0] - 1), np.clip(idx[:, 1], 0, shape[1] - 1))
-
-
 def _column_top(x: np.ndarray, lo, hi, c: float, dx: float, comm) -> np.ndarray:
-    """The surface (top particle + dx / 2) of each c x c plan column; -inf where empty."""
-    shape = _plan_shape(lo, hi, c)
-    top = np.full(shape, -np.inf)
-    ix, iy = _plan_index(x, lo, c, shape)
-    np.maximum.at(top, (ix, iy), x[:, 2] + 0.5 * dx)
+    """The surface (top particle + dx / 2) of each c x c plan column over all ranks;
+    -inf where empty."""
+    top = column_tops(x, lo, c, column_grid(lo, hi, c), 0.5 * dx)
     comm.Allreduce(MPI.IN_PLACE, top, op=MPI.MAX)
     return top
 
