@@ -11,6 +11,7 @@ from psph.geometry.surfaces import surface_particles
 from psph.kernels.boundary import MOTION_FIXED, MOTION_FRICTION, MOTION_SLIP
 from psph.kernels.boundary_3d import boundary_state_3d
 from psph.kernels.neighbours import cell_lists_indexed
+from psph.kernels.spline import dw_cubic
 from tests.helpers import assert_bad_input
 from tests.test_bad_input import run_cli
 
@@ -98,8 +99,9 @@ def _state(motion, soil, bx, bn, v_soil, stress_soil, tan_phi=0.0, rho=2000.0, g
     p = np.zeros(n)
     p[:ns] = p_soil
     z = np.zeros
+    foot = np.zeros((nb, 3))  # the floor z = 0 (the cube's tests use no friction)
     boundary_state_3d(ns, ns, nb, np.arange(nb), np.full(nb, motion), np.full(nb, tan_phi),
-                      np.full(nb, drained), bn, x, v, z((n, 3)), stress, p, p.copy(),
+                      np.full(nb, drained), bn, foot, x, v, z((n, 3)), stress, p, p.copy(),
                       np.full(n, 0.4), np.full(n, rho), np.ones(n), z((n, 3)), z(3),
                       np.array([0.0, 0.0, -g]), cell_of, cell_start, order, ncell, H)
     if p_out is not None:
@@ -138,9 +140,11 @@ def test_a_geostatic_stress_is_continued_linearly_below_the_floor():
 def test_a_friction_surface_carries_at_most_the_coulomb_traction(shear, sticks):
     """Soil under sigma'_zz = -1000 Pa with a shear traction along (1, 1, 0) on a wall
     of friction angle 30 deg, under gravity: below tan(30) x 1000 = 577 Pa it sticks
-    (the shear kept), above it the pair traction (tau~ + tau_b) / 2 is the Coulomb limit
-    along tau~, from the soil's own normal stress (as in 2D), not the one continued to
-    the boundary particle's depth (more compressive)."""
+    (the shear kept), above it the pair traction (tau + tau_b) / 2 is the Coulomb limit
+    along tau, of the normal stress at the surface: the soil's, continued by the weight
+    of the soil between it and the surface, rho g z^ with z^ the soil's height above the
+    floor averaged with the pair sum's weights |dW/dr| (z_j - z_b) / r (not the normal
+    stress continued to the boundary particle's depth, more compressive)."""
     soil, bx, bn = _soil_on_floor()
     s = np.zeros((len(soil), 6))
     s[:, 2] = -1000.0
@@ -154,8 +158,16 @@ def test_a_friction_surface_carries_at_most_the_coulomb_traction(shear, sticks):
     if sticks:
         assert np.allclose(tau_b, shear / np.sqrt(2.0)) and np.allclose(v[reached], -u)
     else:
-        cap = np.tan(np.radians(30.0)) * 1000.0
-        assert np.allclose(pair, cap / np.sqrt(2.0), rtol=1e-12)
+        zhat = []
+        for xb in bx[reached]:
+            d = soil - xb
+            r = np.linalg.norm(d, axis=1)
+            near = (r < 2 * H) & (r > 0)
+            gn = np.maximum(-np.array([dw_cubic(q, H) for q in r[near]]) * d[near, 2]
+                            / r[near], 0.0)
+            zhat.append((gn * soil[near, 2]).sum() / gn.sum())
+        cap = np.tan(np.radians(30.0)) * (1000.0 + 2000.0 * 9.81 * np.array(zhat))
+        assert np.allclose(pair, cap[:, None] / np.sqrt(2.0), rtol=1e-12)
         assert np.allclose(v[reached], u)  # slides: the tangential velocity kept
     assert np.all(sb[reached, 2] < -1000.0 - 100.0)  # the weight continued below the floor
 

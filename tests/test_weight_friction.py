@@ -10,9 +10,10 @@ from psph.kernels.neighbours import bin_particles, grid_bounds
 
 DX = 0.05
 H = 1.2 * DX
+RHO = 2000.0
 
 
-def _contact(x, v, weight_dv):
+def _contact(x, v, weight_dv, stress=None):
     """boundary_contact of particles x (2D or 3D) over a floor (z = 0, y = 0 in 2D) lined
     with one boundary particle dx/2 under each (normal up). Returns (x, v) after it."""
     n, dim = x.shape
@@ -36,8 +37,17 @@ def _contact(x, v, weight_dv):
     vv = np.vstack([v, np.zeros_like(v)])
     boundary_contact(n, allx, vv, np.zeros_like(allx), n, n, np.arange(n), normal, foot,
                      origin, cell, lo, ncell, cell_start, order, H, np.full(n, weight_dv),
-                     DX)
+                     DX, _stress(stress, n, dim), np.full(2 * n, RHO),
+                     np.full(n, 0.5 * 9.81 * DX))
     return allx[:n], vv[:n]
+
+
+def _stress(szz, n: int, dim: int) -> np.ndarray:
+    """Stresses (2n rows) with sigma'_nn = szz[i] on the soil rows (zero if None)."""
+    s = np.zeros((2 * n, 6 if dim == 3 else 4))
+    if szz is not None:
+        s[:n, dim - 1] = szz
+    return s
 
 
 def test_the_tangential_velocity_loses_at_most_the_weights_friction():
@@ -69,3 +79,16 @@ def test_the_weight_friction_in_2d():
     v = np.array([[-0.3, -0.1], [0.05, 0.0], [0.3, 0.0]])
     _, out = _contact(x, v, 0.1)
     assert np.allclose(out, [[-0.2, -0.1], [0.0, 0.0], [0.3, 0.0]], rtol=0, atol=1e-15)
+
+
+def test_only_the_weight_its_own_stress_does_not_carry():
+    """A particle whose sigma'_nn holds half a particle's weight, rho g dx / 2, gets no
+    weight friction (the wall's stress-based Coulomb limit counts its weight:
+    `boundary_3d`); at a quarter of it, half the friction; in tension, all of it (the
+    Drucker-Prager apex's film)."""
+    half = RHO * 9.81 * 0.5 * DX
+    x = np.array([[0.0, 0.0, 0.025], [1.0, 0.0, 0.025], [2.0, 0.0, 0.025],
+                  [3.0, 0.0, 0.025]])
+    v = np.tile([1.0, 0.0, 0.0], (4, 1))
+    _, out = _contact(x, v, 0.1, stress=[-half, -2.0 * half, -0.5 * half, 100.0])
+    assert np.allclose(out[:, 0], [1.0, 1.0, 0.95, 0.9], rtol=0, atol=1e-12)

@@ -182,7 +182,8 @@ def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x,
 
 @nb.njit(cache=True)
 def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
-                     grid_lo, ncell, cell_start, order, h, weight_dv, reach):
+                     grid_lo, ncell, cell_start, order, h, weight_dv, reach, stress, rho,
+                     half_weight):
     """No penetration (safety net): an owned particle found on the wall side of the line
     (in 3D the tangent plane) of its nearest boundary particle (within 2h, in the cell
     lists of this step) is reflected back across it, (x - foot) . n -> -(x - foot) . n,
@@ -190,9 +191,13 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
     or 3D by x (the 2D arithmetic in its own order). Returns the number moved.
 
     The Coulomb friction of a particle's weight (`weight_friction` walls): a particle
-    within `reach` of that plane (after the reflection) loses min(|v_t|, weight_dv[k]) of
-    its tangential velocity v_t = v - (v . n) n, with weight_dv[k] = tan(phi_b) g_n dt of
-    its boundary particle k (0: no such friction)."""
+    within `reach` of that plane (after the reflection) loses min(|v_t|, s weight_dv[k])
+    of its tangential velocity v_t = v - (v . n) n, with weight_dv[k] = tan(phi_b) g_n dt
+    of its boundary particle k (0: no such friction) and s = 1 - max(-sigma'_nn, 0) /
+    (rho half_weight[k]) the share of its weight its own normal stress does not carry
+    (half_weight = g_n dx / 2: none once sigma'_nn holds half a particle's weight, which
+    the wall's stress-based limit then counts, `boundary_3d`; all of it at the
+    Drucker-Prager apex, the film of docs/vv/collapse_3d.md)."""
     three = x.shape[1] == 3
     ncx = ncell[0]
     ncy = ncell[1]
@@ -251,8 +256,30 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
             moved += 1
             d = -d
         if weight_dv[k] > 0.0 and d < reach:
-            _coulomb_weight(v, i, normal, k, weight_dv[k])
+            # the share of the weight the particle's own normal stress does not carry:
+            # all of it at the Drucker-Prager apex (sigma' = 0), none once sigma'_nn
+            # holds half a particle's weight, rho g_n dx / 2 (the wall's stress-based
+            # Coulomb limit then counts its weight: `boundary_3d`)
+            snn = _normal_stress(stress, i, normal, k)
+            share = 1.0 - max(-snn, 0.0) / (rho[i] * half_weight[k])
+            if share > 0.0:
+                _coulomb_weight(v, i, normal, k, share * weight_dv[k])
     return moved
+
+
+@nb.njit(cache=True, inline="always")
+def _normal_stress(stress, i, normal, k):
+    """n . sigma'_i . n of row i on the normal of boundary source k (2D: xx, yy, zz, xy;
+    3D: xx, yy, zz, xy, yz, zx)."""
+    n0 = normal[k, 0]
+    n1 = normal[k, 1]
+    if normal.shape[1] == 2:
+        return (stress[i, 0] * n0 * n0 + stress[i, 1] * n1 * n1
+                + 2.0 * stress[i, 3] * n0 * n1)
+    n2 = normal[k, 2]
+    return (stress[i, 0] * n0 * n0 + stress[i, 1] * n1 * n1 + stress[i, 2] * n2 * n2
+            + 2.0 * (stress[i, 3] * n0 * n1 + stress[i, 4] * n1 * n2
+                     + stress[i, 5] * n2 * n0))
 
 
 @nb.njit(cache=True, inline="always")

@@ -101,6 +101,7 @@ class BoundaryParticles:
         g_n = np.maximum(-(self.normal @ np.asarray(scene.gravity, float)), 0.0)
         self.weight_friction = np.where(np.concatenate(weight), self.tan_phi * g_n, 0.0)
         self.weight_dv = np.zeros_like(self.weight_friction)
+        self.half_weight = 0.5 * g_n * dx  # per unit density: rho g_n dx / 2
         self.reach = dx
         self.key = key_base + np.arange(len(self.x), dtype=float)
         self.cell_volume = dx ** self.dim
@@ -148,7 +149,8 @@ class BoundaryParticles:
         st = store
         if self.dim == 3:
             boundary_state_3d(st.n_real, self.first, self.n, self.src, self.motion,
-                              self.tan_phi, self.drained, self.normal, st.x, st.v, v_slip,
+                              self.tan_phi, self.drained, self.normal, self.foot, st.x,
+                              st.v, v_slip,
                               st.stress, st.p, st.p_prev, st.poro, st.rho, st.perm, st.acc,
                               head_b, body, cell_of, cell_start, order, ncell, self.h)
             return
@@ -165,4 +167,5 @@ class BoundaryParticles:
         np.multiply(self.weight_friction, dt, out=self.weight_dv)
         return boundary_contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
                                 self.normal, self.foot, origin, cell_size, grid_lo, ncell,
-                                cell_start, order, self.h, self.weight_dv, self.reach)
+                                cell_start, order, self.h, self.weight_dv, self.reach,
+                                st.stress, st.rho, self.half_weight)

@@ -1,0 +1,99 @@
+"""A block sliding on a friction surface (issue 37, docs/vv/collapse_3d.md): the floor's
+Coulomb friction against g tan(phi_b).
+
+A dry Drucker-Prager block (phi = 30 degrees, c = 2 kPa: it neither slumps nor shears, it
+slides), 1.0 x 0.3 m between free-slip walls in y, `rows` particles thick at dx =
+0.05 m, on `collapse_3d`'s floor (a surface of boundary particles, Coulomb at phi_b = 30
+degrees, `weight_friction`), starts at 3 m/s after its gravity loading. A floor that
+carries the Coulomb friction of the block's weight once decelerates it at
+g tan(phi_b) = 5.66 m/s^2 whatever its thickness; the deceleration is the slope of its
+mean velocity over 0.05-0.25 s.
+"""
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from psph.app.run import make_slabs
+from psph.config.load import load_scene
+from psph.solver.simulation import Simulation
+
+DX = 0.05
+PHI_B = 30.0
+C = 2.0e3  # the block's cohesion: it does not slump, and slides on the floor
+SCENE = """
+name = "surface_floor_sliding"
+gravity = [0.0, 0.0, -9.81]
+[domain]
+min = [-0.5, 0.0, 0.0]
+max = [6.0, 0.3, 1.0]
+[particles]
+dx = {dx}
+[[particles.blocks]]
+min = [0.0, 0.0, 0.0]
+max = [1.0, 0.3, {h}]
+[material]
+model = "drucker_prager"
+E = 20.0e6
+nu = 0.3
+porosity = 0.4
+rho_s = 2650.0
+k = 1.0e-3
+[material.plasticity]
+phi = 30.0
+c = {c}
+c_r = {c}
+eta = 0.0
+psi = 0.0
+[boundaries]
+front = {{ motion = "slip" }}
+back = {{ motion = "slip" }}
+[[boundaries.surfaces]]
+vertices = [[-1.0, -0.5, 0.0], [7.0, -0.5, 0.0], [7.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]
+triangles = [[0, 1, 2], [0, 2, 3]]
+soil = "above"
+motion = "friction"
+friction_angle = {phi_b}
+weight_friction = {wf}
+[initial]
+k0 = 0.5
+equilibrate = 0.1
+[pressure]
+scheme = "none"
+[time]
+integrator = "symplectic"
+cfl_solid = 0.3
+end = 1.0
+[stabilisation]
+av_alpha = 1.0
+"""
+
+
+def block_deceleration(rows: int, weight_share: float = 1.0) -> float:
+    """The block's deceleration (m/s^2) on one rank; `weight_share` scales the floor's
+    weight friction (0: off; a diagnostic of bench/diagnostics/surface_floor_sliding.py)."""
+    text = SCENE.format(dx=DX, h=rows * DX, phi_b=PHI_B, c=C,
+                        wf="true" if weight_share > 0 else "false")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "surface_floor_sliding.toml"
+        path.write_text(text)
+        scene = load_scene(str(path))
+    sim = Simulation(scene, make_slabs(scene, MPI.COMM_SELF))
+    if weight_share > 0:
+        sim.wall_particles.weight_friction *= weight_share
+    sim.equilibrate()
+    st = sim.store
+    n = st.n_owned
+    st.v[:n, 0] = 3.0
+    mass = st.rho[:n] * st.vol[:n]
+    times, speeds = [], []
+    while sim.t < 0.25:
+        sim.advance_one()
+        if sim.failure is not None:
+            raise RuntimeError(f"failed: {sim.failure}")
+        if sim.t >= 0.05:
+            times.append(sim.t)
+            speeds.append(float(np.average(st.v[:n, 0], weights=mass)))
+    return -float(np.polyfit(times, speeds, 1)[0])
