@@ -71,11 +71,24 @@ av_alpha = 1.0
 """
 
 
-def block_deceleration(rows: int, weight_share: float = 1.0) -> float:
+def scene_2d() -> str:
+    """The same block in 2D on a friction polyline (the 2D boundary particles)."""
+    s = SCENE.replace("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, -9.81]")
+    s = s.replace("min = [-0.5, 0.0, 0.0]\nmax = [6.0, 0.3, 1.0]",
+                  "min = [-0.5, 0.0]\nmax = [6.0, 1.0]")
+    s = s.replace("min = [0.0, 0.0, 0.0]\nmax = [1.0, 0.3, {h}]",
+                  "min = [0.0, 0.0]\nmax = [1.0, {h}]")
+    s = s.replace('front = {{ motion = "slip" }}\nback = {{ motion = "slip" }}\n', "")
+    return (s[:s.index("[[boundaries.surfaces]]")] + "[[boundaries.polylines]]\n"
+            "points = [[-1.0, 0.0], [7.0, 0.0]]\n" + s[s.index('soil = "above"'):])
+
+
+def block_deceleration(rows: int, weight_share: float = 1.0, dim: int = 3) -> float:
     """The block's deceleration (m/s^2) on one rank; `weight_share` scales the floor's
-    weight friction (0: off; a diagnostic of bench/diagnostics/surface_floor_sliding.py)."""
-    text = SCENE.format(dx=DX, h=rows * DX, phi_b=PHI_B, c=C,
-                        wf="true" if weight_share > 0 else "false")
+    weight friction (0: off; a diagnostic of bench/diagnostics/surface_floor_sliding.py);
+    dim = 2: on a friction polyline."""
+    text = (SCENE if dim == 3 else scene_2d()).format(
+        dx=DX, h=rows * DX, phi_b=PHI_B, c=C, wf="true" if weight_share > 0 else "false")
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "surface_floor_sliding.toml"
         path.write_text(text)
