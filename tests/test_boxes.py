@@ -14,7 +14,7 @@ import pytest
 
 from psph.app.run import run
 from psph.config.load import load_scene
-from psph.decomposition.boxes import choose_layout
+from psph.decomposition.boxes import box_partners, choose_layout
 from psph.kernels.packing import (
     box_halo,
     box_owners,
@@ -69,6 +69,25 @@ def test_box_owners_and_halo_match_a_brute_force_search():
             if np.all((cm[i] >= lo[r] - width) & (cm[i] < hi[r] + width))}
     assert got == want and m == len(want) and len(want) > 0
 
+
+
+def test_box_partners_are_the_boxes_within_the_width():
+    """Three slabs of two boxes whose boxes do not line up: the partners of each box are
+    those whose closed extents come within the width along both axes (brute force), the
+    relation is symmetric, and the far slab's boxes are no partners of the first's."""
+    cuts0 = np.array([-np.inf, 1.0, 2.0, np.inf])
+    cuts1 = np.array([[-np.inf, 0.5, np.inf], [-np.inf, 0.3, np.inf],
+                      [-np.inf, 0.6, np.inf]])
+    width = 0.1
+    lo = np.array([[cuts0[r // 2], cuts1[r // 2, r % 2]] for r in range(6)])
+    hi = np.array([[cuts0[r // 2 + 1], cuts1[r // 2, r % 2 + 1]] for r in range(6)])
+    got = {r: set(box_partners(cuts0, cuts1, r, width).tolist()) for r in range(6)}
+    for r in range(6):
+        gap = np.maximum(lo - hi[r], lo[r] - hi)  # per axis, the gap between the boxes
+        want = {q for q in range(6) if q != r and np.all(gap[q] <= width)}
+        assert got[r] == want
+    assert all(r in got[q] for r in range(6) for q in got[r])
+    assert got[0] == {1, 2, 3} and got[5] == {3, 4}
 
 
 def test_row_moves_match_numpy():
@@ -154,6 +173,26 @@ def test_2d_boxes_on_four_ranks_equal_one_rank(tmp_path):
     assert compare_runs(tmp_path / "one" / "particles.h5",
                         tmp_path / "four" / "particles.h5") is None
     assert _summary(tmp_path / "four")["decomposition"]["shape"] == [2, 2]
+
+
+def test_2d_boxes_on_six_ranks_equal_one_rank(tmp_path):
+    """The saturated collapse in 3 x 2 boxes: the first and the last slab's boxes are no
+    partners, so rows move point-to-point between partners only; the same bits as one
+    rank."""
+    from mpi4py import MPI
+
+    settings = ["time.end=0.004", "output.interval=0.002"]
+    run(load_scene("collapse_saturated_psi0", settings), tmp_path / "one",
+        comm=MPI.COMM_SELF, quiet=True)
+    _mpirun_scene(6, "collapse_saturated_psi0", tmp_path / "six",
+                  settings + ["decomposition.cuts='boxes'"])
+    assert compare_runs(tmp_path / "one" / "particles.h5",
+                        tmp_path / "six" / "particles.h5") is None
+    d = _summary(tmp_path / "six")["decomposition"]
+    assert d["shape"] == [3, 2]
+    cuts0 = np.array([-np.inf] + d["cuts0"] + [np.inf])
+    cuts1 = np.array([[-np.inf] + row + [np.inf] for row in d["cuts1"]])
+    assert not {4, 5} & set(box_partners(cuts0, cuts1, 0, 0.2).tolist())  # slabs > 1 m
 
 
 def test_boxes_hold_less_halo_than_slabs_on_a_3d_block(tmp_path):

@@ -9,13 +9,16 @@ added; a box's halo is its perimeter's (the scaling model, `bench/performance/
 scaling_model_3d.py`). `choose_layout` picks n0 x n1 from the rank count and the
 particles' extent; `decomposition.cuts` forces slabs or boxes.
 
-Every step, `exchange` moves the particles that left their box to its owner (one
-all-to-all), then sends each owned particle within `width` of another rank's box (its
-faces, edges and corners) to that rank as halo (a second all-to-all); `refresh_halo`
-repeats the second with fresh values. Any rank may be a particle's new owner or a halo
-destination, so no box needs a minimum width. A fresh run seeds its particles in the 1D
-slabs of `Slabs` (the lattice's ids are counted over disjoint slabs in rank order) and
-`settle` moves them to their boxes.
+Every step, `exchange` moves the particles that left their box to its owner, then sends
+each owned particle within `width` of another rank's box (its faces, edges and corners)
+to that rank as halo; `refresh_halo` repeats the second with fresh values. Both go to
+the partners only, the ranks whose boxes lie within `width` of this one along both axes
+(`box_partners`): point-to-point messages, a count and then the rows, so that a step's
+messages do not grow with the rank count (an all-to-all's do). A particle that moved
+farther than `width` in one step (found by one collective flag) sends that step's
+migration over all ranks instead, as a recut's does; no box needs a minimum width. A
+fresh run seeds its particles in the 1D slabs of `Slabs` (the lattice's ids are counted
+over disjoint slabs in rank order) and `settle` moves them to their boxes.
 """
 
 import numpy as np
@@ -76,6 +79,22 @@ def box_cuts(comm, c0: np.ndarray, c1: np.ndarray, shape: tuple[int, int]
     return cuts0, cuts1
 
 
+def box_partners(cuts0: np.ndarray, cuts1: np.ndarray, me: int, width: float) -> np.ndarray:
+    """The ranks (ascending, `me` left out) whose boxes lie within `width` of box `me`
+    along both axes, their closed extents compared: every rank a row of box `me` can be
+    halo for (`packing.box_halo`), or move to in a step shorter than `width`. Symmetric:
+    r is a partner of me exactly when me is one of r."""
+    n1 = cuts1.shape[1] - 1
+    ranks = np.arange((cuts0.shape[0] - 1) * n1)
+    s, b = np.divmod(ranks, n1)
+    lo0, hi0 = cuts0[s], cuts0[s + 1]
+    lo1, hi1 = cuts1[s, b], cuts1[s, b + 1]
+    near = ((lo0 <= hi0[me] + width) & (hi0 >= lo0[me] - width)
+            & (lo1 <= hi1[me] + width) & (hi1 >= lo1[me] - width))
+    near[me] = False
+    return ranks[near]
+
+
 class Boxes(Slabs):
     """Boxes along two axes, one a rank (module docstring). `seed_cuts`: the 1D slabs
     along axes[0] over all ranks in which a fresh run seeds its particles (`slab`);
@@ -93,6 +112,7 @@ class Boxes(Slabs):
         self._ints: dict[str, np.ndarray] = {}
         self._send_counts = np.zeros(self.size, np.int64)
         self._recv_counts = np.zeros(self.size, np.int64)
+        self._partners: tuple | None = None  # (width, partners, is_partner) of the cuts
         self._halo = None  # the last exchange's halo plan (`refresh_halo`)
         # until `settle` cuts the boxes, this rank's part is its seed slab
         self.cuts0 = self.cuts1 = None
@@ -101,6 +121,7 @@ class Boxes(Slabs):
             self.set_boxes(cuts0, cuts1)
 
     def set_boxes(self, cuts0: np.ndarray, cuts1: np.ndarray) -> None:
+        self._partners = None
         self.cuts0 = np.ascontiguousarray(cuts0, float)
         self.cuts1 = np.ascontiguousarray(cuts1, float)
         s, b = divmod(self.rank, self.shape[1])
@@ -142,32 +163,66 @@ class Boxes(Slabs):
         box_owners(store.x, n, self.axes[0], self.axes[1], self.cuts0, self.cuts1, owner)
         return owner[:n]
 
+    def _partners_within(self, width: float) -> tuple[np.ndarray, np.ndarray]:
+        """(partners, is_partner (size,) bool) for the current cuts (`box_partners`)."""
+        if self._partners is None or self._partners[0] != width:
+            partners = box_partners(self.cuts0, self.cuts1, self.rank, width)
+            is_partner = np.zeros(self.size, bool)
+            is_partner[partners] = True
+            self._partners = (width, partners, is_partner)
+        return self._partners[1], self._partners[2]
+
     def _alltoall_rows(self, store: ParticleStore, rows: np.ndarray, send_counts: np.ndarray,
-                       kept: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                       kept: bool = True, partners: np.ndarray | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
         """Send store rows `rows`, grouped by destination rank (`send_counts` of them to
         each rank, in that order); returns the received rows (n, width) in source-rank
         order and the counts received from each rank (a kept array: read it before the
         next call). Collective. `kept`: the message buffers are kept for the next step's
         (the per-step exchange); a recut's, whose messages may hold most of the rank's
-        rows, are temporaries."""
+        rows, are temporaries. `partners`: the only ranks rows go to and come from
+        (point-to-point messages, the same bits as the all-to-all); None: any rank."""
         w = store.row_width
         send = self._send_buffer("boxes_send", len(rows), w) if kept else \
             np.empty((max(len(rows), 1), w))
         pack_rows(store.all_rows, rows, len(rows), send)
         recv_counts = self._recv_counts
-        self.comm.Alltoall(send_counts, recv_counts)
+        if partners is None:
+            self.comm.Alltoall(send_counts, recv_counts)
+        else:
+            recv_counts[:] = 0
+            reqs = [self.comm.Irecv(recv_counts[r:r + 1], source=r, tag=41) for r in partners]
+            reqs += [self.comm.Isend(send_counts[r:r + 1], dest=r, tag=41) for r in partners]
+            MPI.Request.Waitall(reqs)
         n_in = int(recv_counts.sum())
         recv = self._send_buffer("boxes_recv", n_in, w) if kept else \
             np.empty((max(n_in, 1), w))
-        self.comm.Alltoallv([send, (send_counts * w, _displacements(send_counts) * w),
-                             MPI.DOUBLE],
-                            [recv, (recv_counts * w, _displacements(recv_counts) * w),
-                             MPI.DOUBLE])
+        if partners is None:
+            self.comm.Alltoallv([send, (send_counts * w, _displacements(send_counts) * w),
+                                 MPI.DOUBLE],
+                                [recv, (recv_counts * w, _displacements(recv_counts) * w),
+                                 MPI.DOUBLE])
+            return recv[:n_in], recv_counts
+        reqs = []
+        at = _displacements(recv_counts)
+        for r in partners:
+            if recv_counts[r]:
+                reqs.append(self.comm.Irecv(recv[at[r]:at[r] + recv_counts[r]], source=r,
+                                            tag=42))
+        at = _displacements(send_counts)
+        for r in partners:
+            if send_counts[r]:
+                reqs.append(self.comm.Isend(send[at[r]:at[r] + send_counts[r]], dest=r,
+                                            tag=42))
+        MPI.Request.Waitall(reqs)
         return recv[:n_in], recv_counts
 
-    def _migrate(self, store: ParticleStore, owner: np.ndarray, kept: bool = True) -> None:
+    def _migrate(self, store: ParticleStore, owner: np.ndarray, kept: bool = True,
+                 width: float | None = None) -> None:
         """The owned rows whose `owner` is another rank go there; the rest stay in order,
-        the received ones follow them as owned. Collective."""
+        the received ones follow them as owned. Collective. `width`: the step's halo
+        width, whose partners take the rows unless a row goes farther on some rank
+        (then, as with None, all ranks)."""
         n = store.n_owned
         keep = self._rows_buffer("keep", n)
         leave = self._rows_buffer("leave", n)
@@ -175,7 +230,14 @@ class Boxes(Slabs):
         nk, nl = split_by_owner(owner, n, self.rank, keep, leave, leave_dest)
         grouped = self._rows_buffer("grouped", nl)
         group_by_rank(leave_dest, leave, nl, self._send_counts, grouped)
-        recv, _ = self._alltoall_rows(store, grouped[:nl], self._send_counts, kept)
+        partners = None
+        if width is not None:
+            partners, is_partner = self._partners_within(width)
+            far = bool(np.any(self._send_counts[~is_partner]))
+            if self.any(far):
+                partners = None
+        recv, _ = self._alltoall_rows(store, grouped[:nl], self._send_counts, kept,
+                                      partners)
         if nl:
             compact_rows(store.all_rows, keep, nk)
             store.n_owned = nk
@@ -222,7 +284,7 @@ class Boxes(Slabs):
         store.n_halo = store.n_ghost = 0
         if self.size == 1:
             return
-        self._migrate(store, self._owners(store))
+        self._migrate(store, self._owners(store), width=width)
         n = store.n_owned
         dest = self._rows_buffer("halo_dest", n)
         rows = self._rows_buffer("halo_rows", n)
@@ -237,7 +299,11 @@ class Boxes(Slabs):
         send_rows = self._rows_buffer("halo_send", m)[:m]
         send_counts = self._rows_buffer("halo_counts", self.size)[:self.size]
         group_by_rank(dest, rows, m, send_counts, send_rows)
-        recv, recv_counts = self._alltoall_rows(store, send_rows, send_counts)
+        partners, is_partner = self._partners_within(width)
+        if np.any(send_counts[~is_partner]):  # box_halo's ranks are partners by definition
+            raise RuntimeError(f"rank {self.rank}: halo for a rank beyond {width} m")
+        recv, recv_counts = self._alltoall_rows(store, send_rows, send_counts,
+                                                partners=partners)
         store.ensure(n + len(recv) + 64)
         unpack_rows(recv, len(recv), store.all_rows, n)
         store.n_halo = len(recv)
