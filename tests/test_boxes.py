@@ -88,6 +88,11 @@ def test_box_partners_are_the_boxes_within_the_width():
         assert got[r] == want
     assert all(r in got[q] for r in range(6) for q in got[r])
     assert got[0] == {1, 2, 3} and got[5] == {3, 4}
+    # a near tie, where lo_r <= hi_me + w and hi_r >= lo_me - w round differently
+    cuts0 = np.array([-np.inf, 0.9385958677423489, 1.038595867742349, np.inf])
+    cuts1 = np.array([[-np.inf, np.inf]] * 3)
+    got = {r: set(box_partners(cuts0, cuts1, r, 0.1).tolist()) for r in range(3)}
+    assert all(r in got[q] for r in range(3) for q in got[r]), got
 
 
 def test_row_moves_match_numpy():

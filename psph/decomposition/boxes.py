@@ -82,15 +82,20 @@ def box_cuts(comm, c0: np.ndarray, c1: np.ndarray, shape: tuple[int, int]
 def box_partners(cuts0: np.ndarray, cuts1: np.ndarray, me: int, width: float) -> np.ndarray:
     """The ranks (ascending, `me` left out) whose boxes lie within `width` of box `me`
     along both axes, their closed extents compared: every rank a row of box `me` can be
-    halo for (`packing.box_halo`), or move to in a step shorter than `width`. Symmetric:
-    r is a partner of me exactly when me is one of r."""
+    halo for (`packing.box_halo`), or move to in a step shorter than `width`. Symmetric
+    to the last bit: r is a partner of me exactly when me is one of r, because both
+    compute the same gap max(lo_r - hi_me, lo_me - hi_r) per axis (a one-sided relation
+    would leave a receive waiting for ever). An empty box at an infinite cut has a NaN
+    gap: no partner."""
     n1 = cuts1.shape[1] - 1
     ranks = np.arange((cuts0.shape[0] - 1) * n1)
     s, b = np.divmod(ranks, n1)
     lo0, hi0 = cuts0[s], cuts0[s + 1]
     lo1, hi1 = cuts1[s, b], cuts1[s, b + 1]
-    near = ((lo0 <= hi0[me] + width) & (hi0 >= lo0[me] - width)
-            & (lo1 <= hi1[me] + width) & (hi1 >= lo1[me] - width))
+    with np.errstate(invalid="ignore"):
+        gap0 = np.maximum(lo0 - hi0[me], lo0[me] - hi0)
+        gap1 = np.maximum(lo1 - hi1[me], lo1[me] - hi1)
+        near = (gap0 <= width) & (gap1 <= width)
     near[me] = False
     return ranks[near]
 
@@ -300,8 +305,10 @@ class Boxes(Slabs):
         send_counts = self._rows_buffer("halo_counts", self.size)[:self.size]
         group_by_rank(dest, rows, m, send_counts, send_rows)
         partners, is_partner = self._partners_within(width)
-        if np.any(send_counts[~is_partner]):  # box_halo's ranks are partners by definition
-            raise RuntimeError(f"rank {self.rank}: halo for a rank beyond {width} m")
+        # box_halo's ranks are partners (box_partners); were one not, on any rank, the
+        # halo goes over all ranks this step rather than lose its rows or hang
+        if self.any(bool(np.any(send_counts[~is_partner]))):
+            partners = None
         recv, recv_counts = self._alltoall_rows(store, send_rows, send_counts,
                                                 partners=partners)
         store.ensure(n + len(recv) + 64)

@@ -193,7 +193,16 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
         tau1 = t1 - s_nn * n1
         tau2 = t2 - s_nn * n2
         mode = motion[k]
-        if mode == MOTION_FRICTION and gs > 0.0:
+        if mode == MOTION_FRICTION and gs == 0.0:
+            # no soil particle toward the wall's side of b (at a surface's edge): the
+            # Shepard averages' limit
+            cap = tan_phi[k] * max(-s_nn, 0.0)
+            tau = math.sqrt(tau0 * tau0 + tau1 * tau1 + tau2 * tau2)
+            if tau <= cap:
+                mode = MOTION_FIXED
+            else:
+                _add_sym(stress, b, tau0, tau1, tau2, n0, n1, n2, 2.0 * cap / tau - 2.0)
+        elif mode == MOTION_FRICTION:
             # the Coulomb limit on the pair sum of Eq. (26) over the soil particles j
             # that b reaches, sum_j (sigma_j + sigma_b) n dW_jb/dn: the soil's traction
             # averaged with those weights (hat), its normal stress continued to the
