@@ -11,7 +11,7 @@ from psph.geometry.surfaces import surface_particles
 from psph.kernels.boundary import MOTION_FIXED, MOTION_FRICTION, MOTION_SLIP
 from psph.kernels.boundary_3d import boundary_state_3d
 from psph.kernels.neighbours import cell_lists_indexed
-from psph.kernels.spline import dw_cubic
+from psph.kernels.spline import dw_cubic, w_cubic
 from tests.helpers import assert_bad_input
 from tests.test_bad_input import run_cli
 
@@ -170,6 +170,39 @@ def test_a_friction_surface_carries_at_most_the_coulomb_traction(shear, sticks):
         assert np.allclose(pair, cap[:, None] / np.sqrt(2.0), rtol=1e-12)
         assert np.allclose(v[reached], u)  # slides: the tangential velocity kept
     assert np.all(sb[reached, 2] < -1000.0 - 100.0)  # the weight continued below the floor
+
+
+def test_the_friction_limit_holds_for_the_pair_sum_of_a_sheared_base():
+    """A shear that falls with height, as in a block sliding on the floor (the bottom
+    row's far above the next): the wall's shear tau_b makes the pair sum of Eq. (26),
+    sum_j g_j (tau_j + tau_b) / sum_j g_j with g_j = |dW/dr| (z_j - z_b) / r, equal to
+    the Coulomb limit of each boundary particle. With the Shepard average of tau
+    instead (the rule before), it would not: that average weights the upper rows more."""
+    soil, bx, bn = _soil_on_floor()
+    s = np.zeros((len(soil), 6))
+    s[:, 2] = -1000.0
+    s[:, 5] = 3000.0 * np.exp(-soil[:, 2] / DX)  # zx: the traction along x on the floor
+    v, sb = _state(MOTION_FRICTION, soil, bx, bn, np.array([0.3, 0.0, 0.0]), s,
+                   tan_phi=np.tan(np.radians(30.0)), rho=2000.0)
+    reached = _within_support(soil, bx)
+    checked = differs = 0
+    for k in np.flatnonzero(reached):
+        d = soil - bx[k]
+        r = np.linalg.norm(d, axis=1)
+        near = (r < 2 * H) & (r > 0)
+        g = np.maximum(-np.array([dw_cubic(q, H) for q in r[near]]) * d[near, 2] / r[near],
+                       0.0)
+        if g.sum() == 0.0:
+            continue
+        zhat = (g * soil[near, 2]).sum() / g.sum()
+        cap = np.tan(np.radians(30.0)) * (1000.0 + 2000.0 * 9.81 * zhat)
+        pair = (g * (s[near, 5] + sb[k, 5])).sum() / g.sum()
+        assert pair == pytest.approx(2.0 * cap, rel=1e-12)
+        w = np.array([w_cubic(q, H) for q in r[near]])
+        shepard = (w * s[near, 5]).sum() / w.sum()
+        differs += abs(shepard - (g * s[near, 5]).sum() / g.sum()) > 10.0
+        checked += 1
+    assert checked > 10 and differs > 10, (checked, differs)  # the weights matter
 
 
 def test_a_side_wall_continues_no_weight_and_a_drained_one_mirrors_p():

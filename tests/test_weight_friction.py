@@ -92,3 +92,12 @@ def test_only_the_weight_its_own_stress_does_not_carry():
     v = np.tile([1.0, 0.0, 0.0], (4, 1))
     _, out = _contact(x, v, 0.1, stress=[-half, -2.0 * half, -0.5 * half, 100.0])
     assert np.allclose(out[:, 0], [1.0, 1.0, 0.95, 0.9], rtol=0, atol=1e-12)
+
+
+def test_the_share_in_2d():
+    """The same share on a 2D polyline's floor (sigma'_yy the normal stress)."""
+    half = RHO * 9.81 * 0.5 * DX
+    x = np.array([[0.0, 0.025], [1.0, 0.025], [2.0, 0.025]])
+    v = np.tile([1.0, 0.0], (3, 1))
+    _, out = _contact(x, v, 0.1, stress=[-half, -0.5 * half, 0.0])
+    assert np.allclose(out[:, 0], [1.0, 0.95, 0.9], rtol=0, atol=1e-12)
