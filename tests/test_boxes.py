@@ -166,38 +166,26 @@ def test_3d_boxes_on_four_ranks_equal_one_rank_and_restart_on_two(tmp_path):
     assert c_four["load_balance"]["rebalances"] > 0
 
 
-def test_2d_boxes_on_four_ranks_equal_one_rank(tmp_path):
-    """The saturated collapse (TPI, walls, K0) in 2D, cut in 2 x 2 boxes."""
+@pytest.mark.parametrize("ranks, shape, end", [(4, [2, 2], 0.01), (6, [3, 2], 0.004)])
+def test_2d_boxes_equal_one_rank(tmp_path, ranks, shape, end):
+    """The saturated collapse (TPI, walls, K0) in 2D, cut in 2 x 2 and in 3 x 2 boxes; in
+    3 x 2 the first and the last slab's boxes are no partners, so rows move
+    point-to-point between partners only. The same bits as one rank."""
     from mpi4py import MPI
 
-    settings = ["time.end=0.01", "output.interval=0.005"]
+    settings = [f"time.end={end}", f"output.interval={end / 2}"]
     run(load_scene("collapse_saturated_psi0", settings), tmp_path / "one",
         comm=MPI.COMM_SELF, quiet=True)
-    _mpirun_scene(4, "collapse_saturated_psi0", tmp_path / "four",
+    _mpirun_scene(ranks, "collapse_saturated_psi0", tmp_path / "many",
                   settings + ["decomposition.cuts='boxes'"])
     assert compare_runs(tmp_path / "one" / "particles.h5",
-                        tmp_path / "four" / "particles.h5") is None
-    assert _summary(tmp_path / "four")["decomposition"]["shape"] == [2, 2]
-
-
-def test_2d_boxes_on_six_ranks_equal_one_rank(tmp_path):
-    """The saturated collapse in 3 x 2 boxes: the first and the last slab's boxes are no
-    partners, so rows move point-to-point between partners only; the same bits as one
-    rank."""
-    from mpi4py import MPI
-
-    settings = ["time.end=0.004", "output.interval=0.002"]
-    run(load_scene("collapse_saturated_psi0", settings), tmp_path / "one",
-        comm=MPI.COMM_SELF, quiet=True)
-    _mpirun_scene(6, "collapse_saturated_psi0", tmp_path / "six",
-                  settings + ["decomposition.cuts='boxes'"])
-    assert compare_runs(tmp_path / "one" / "particles.h5",
-                        tmp_path / "six" / "particles.h5") is None
-    d = _summary(tmp_path / "six")["decomposition"]
-    assert d["shape"] == [3, 2]
-    cuts0 = np.array([-np.inf] + d["cuts0"] + [np.inf])
-    cuts1 = np.array([[-np.inf] + row + [np.inf] for row in d["cuts1"]])
-    assert not {4, 5} & set(box_partners(cuts0, cuts1, 0, 0.2).tolist())  # slabs > 1 m
+                        tmp_path / "many" / "particles.h5") is None
+    d = _summary(tmp_path / "many")["decomposition"]
+    assert d["shape"] == shape
+    if ranks == 6:
+        cuts0 = np.array([-np.inf] + d["cuts0"] + [np.inf])
+        cuts1 = np.array([[-np.inf] + row + [np.inf] for row in d["cuts1"]])
+        assert not {4, 5} & set(box_partners(cuts0, cuts1, 0, 0.2).tolist())  # slabs > 1 m
 
 
 def test_boxes_hold_less_halo_than_slabs_on_a_3d_block(tmp_path):

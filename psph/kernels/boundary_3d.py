@@ -61,6 +61,13 @@ def _add_sym(stress, b, a0, a1, a2, n0, n1, n2, f):
     stress[b, 5] += f * (a2 * n0 + a0 * n2)
 
 
+@nb.njit(cache=True, inline="always")
+def _add_row(stress, j, f, a0, a1, a2, a3, a4, a5):
+    """(a0, ..., a5) + f stress[j, :6]: a weighted sum's step over the six components."""
+    return (a0 + f * stress[j, 0], a1 + f * stress[j, 1], a2 + f * stress[j, 2],
+            a3 + f * stress[j, 3], a4 + f * stress[j, 4], a5 + f * stress[j, 5])
+
+
 @nb.njit(cache=True)
 def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal, foot, x,
                       v, v_slip, stress, p, p_prev, poro, rho, perm, acc, head_b, body,
@@ -142,12 +149,8 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
                                 gn = -dw_cubic(r, h) * (n0 * d0 + n1 * d1 + n2 * d2) / r
                                 gn = max(-gn, 0.0)
                                 gs += gn
-                                g0 += gn * stress[j, 0]
-                                g1 += gn * stress[j, 1]
-                                g2 += gn * stress[j, 2]
-                                g3 += gn * stress[j, 3]
-                                g4 += gn * stress[j, 4]
-                                g5 += gn * stress[j, 5]
+                                g0, g1, g2, g3, g4, g5 = _add_row(stress, j, gn, g0, g1, g2,
+                                                                  g3, g4, g5)
                             e0 = f0 - x[j, 0]
                             e1 = f1 - x[j, 1]
                             e2 = f2 - x[j, 2]
@@ -157,12 +160,8 @@ def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal,
                             else:
                                 s_surface += gn * (ws_ + head_b[0] * e0 + head_b[1] * e1
                                                    + head_b[2] * e2)
-                        s0 += w * stress[j, 0]
-                        s1 += w * stress[j, 1]
-                        s2 += w * stress[j, 2]
-                        s3 += w * stress[j, 3]
-                        s4 += w * stress[j, 4]
-                        s5 += w * stress[j, 5]
+                        s0, s1, s2, s3, s4, s5 = _add_row(stress, j, w, s0, s1, s2, s3, s4,
+                                                          s5)
                         sn += w * poro[j]
                         sr += w * rho[j]
                         sk += w * perm[j]
