@@ -29,6 +29,10 @@ def _stages(overrides):
     (["stabilisation.shepard_every=20"], ["shepard[every 20]"], []),
     (["pressure.scheme='none'", "stabilisation.shepard_every=20"],
      ["interactions[momentum]", "update[dry,elastic]"], ["pressure", "shepard"]),
+    # a dry scene filters its stress, if asked, and has no pressure to filter
+    (["pressure.scheme='none'", "stabilisation.shepard_every=20",
+      "stabilisation.shepard_stress=true", "stabilisation.stress_filter='mls'"],
+     ["mls_stress[every 20]"], ["pressure", "shepard"]),
     (["material.model='drucker_prager'", "material.plasticity.phi=30.0"],
      ["update[explicit->tpi,drucker_prager]"], ["elastic"]),
     (["boundaries.left.motion='free'", "boundaries.right.motion='free'",

@@ -218,7 +218,8 @@ class Stabilisation(_Model):
     corrected_strain_rate: bool = Field(
         False, description="Apply the Eq. (22) correction to the shear rate and spin too")
     shepard_every: Annotated[int, Field(ge=0)] = Field(
-        0, description="Steps m between Shepard filters of p, Eq. (46); 0 is off")
+        0, description="Steps m between Shepard filters of p, Eq. (46), and of σ' with "
+        "shepard_stress (a dry scene filters σ' only); 0 is off")
     # psph/kernels/shifting.py; issue 13, cause 12
     shifting: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Particle-shifting coefficient A of D = A h^2 |grad v| dt; 0 is "

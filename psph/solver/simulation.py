@@ -207,13 +207,14 @@ class Simulation(Stages):
             stages.append(Stage("boundary_state", self._boundary_state))
         if self.coupled and self.drainage.has_planes:
             stages.append(Stage("drained_planes", self._drained_planes))
-        m = self.scene.stabilisation.shepard_every
-        if self.coupled and m > 0:
-            stab = self.scene.stabilisation
-            name = "shepard"
+        stab = self.scene.stabilisation
+        m = stab.shepard_every
+        # a dry scene has no pressure to filter: only its stress filter, if asked
+        if m > 0 and (self.coupled or stab.shepard_stress):
+            names = ["shepard"] if self.coupled else []
             if stab.shepard_stress:
-                name += "+stress" if stab.stress_filter == "shepard" else "+mls_stress"
-            stages.append(Stage(f"{name}[every {m}]", self._shepard, every=m))
+                names.append("stress" if stab.stress_filter == "shepard" else "mls_stress")
+            stages.append(Stage(f"{'+'.join(names)}[every {m}]", self._shepard, every=m))
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
         stages.append(Stage(name, self._interactions))

@@ -134,8 +134,9 @@ class Stages:
         self.drainage.update_planes(self.t, self.store, self.slabs)
 
     def _shepard(self) -> None:
-        """Eq. (46) on owned particles, then the halo and ghosts again so that every copy
-        of a particle carries its filtered pressure (positions have not moved yet)."""
+        """Eq. (46) on owned particles (the pressure in a coupled scene, the stress if
+        `shepard_stress`), then the halo and ghosts again so that every copy of a particle
+        carries its filtered values (positions have not moved yet)."""
         st = self.store
         if self.scratch_moments.shape[0] < st.cap:
             self.scratch_moments = np.zeros((st.cap, self.kernels.moment_columns))
@@ -143,25 +144,29 @@ class Stages:
         mom = self.scratch_moments
         stab = self.scene.stabilisation
         s = self.soil
-        if stab.pressure_filter_porosity:
+        if self.coupled and stab.pressure_filter_porosity:
             p_before = self.scratch_trace[:st.n_owned]
             p_before[:] = st.p[:st.n_owned]
-        self.kernels.shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev, st.vol,
-                                      st.drained_from, self.drainage.layer_clock(self.t),
-                                      self.cell_start, self.order, self.ncell, self.h, mom)
-        if stab.pressure_filter_porosity:
+        if self.coupled:
+            self.kernels.shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev,
+                                          st.vol, st.drained_from,
+                                          self.drainage.layer_clock(self.t), self.cell_start,
+                                          self.order, self.ncell, self.h, mom)
+        if self.coupled and stab.pressure_filter_porosity:
             porosity_follows_pressure_filter(
                 st.n_owned, p_before, st.p, st.poro, st.poro0, st.vol, st.vol0, st.rho,
                 st.perm, s.rho_l, self.mat, st.material, s.K_l)
         if stab.shepard_stress:
             stress_filter = self.kernels.mls_stress if stab.stress_filter == "mls" \
                 else self.kernels.shepard_stress
-            if stab.stress_filter_porosity:
+            # a dry scene's porosity does not follow its strain (Eq. 24 is not solved)
+            follow = self.coupled and stab.stress_filter_porosity
+            if follow:
                 trace = self.scratch_trace[:st.n_owned]
                 np.sum(st.stress[:st.n_owned, :3], axis=1, out=trace)
             stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
                           self.order, self.ncell, self.h, mom)
-            if stab.stress_filter_porosity:
+            if follow:
                 porosity_follows_stress_filter(
                     st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
                     st.perm, s.rho_l, self.mat, st.material)
