@@ -55,6 +55,11 @@ class Plasticity(_Model):
         0.0, description="Decay rate of the dilation angle, Eq. (19); 0 keeps ψ0 [-]")
     regularisation: Regularisation | None = Field(
         None, description="Non-local softening (issue 17); none keeps the local law")
+    # issue 37: in 3D the plane-strain cone is a third weaker in triaxial compression
+    surface: Literal["plane_strain", "mohr_coulomb"] = Field(
+        "plane_strain", description="Yield cone: \"plane_strain\", Eq. (16)'s fit (the "
+        "paper's); \"mohr_coulomb\", the cone through Mohr–Coulomb at each stress's Lode "
+        "angle (the same φ and c in every stress state, for 3D)")
     # issue 13; none is the paper's law
     tension_cutoff: Annotated[float, Field(ge=0.0)] | None = Field(
         None, description="Largest mean effective stress σ'_m carried (tension positive); "

@@ -23,6 +23,8 @@ import math
 
 import numba as nb
 
+SQRT3 = math.sqrt(3.0)
+
 
 @nb.njit(cache=True, inline="always")
 def dp_constants(phi, c):
@@ -30,6 +32,32 @@ def dp_constants(phi, c):
     t = math.tan(phi)
     d = math.sqrt(9.0 + 12.0 * t * t)
     return t / d, 3.0 * c / d
+
+
+@nb.njit(cache=True, inline="always")
+def mc_constants(phi, c, sin_t, cos_t):
+    """(xi, kappa) of the cone through the Mohr-Coulomb surface at Lode angle theta
+    (sin_t, cos_t; +30 deg is triaxial compression): MC in invariants,
+    I1 sin(phi) / 3 + sqrt(J2) a - c cos(phi) = 0 with a = cos(theta) - sin(theta)
+    sin(phi) / sqrt(3), divided by a. The apex kappa / xi = 3 c cot(phi) for every theta;
+    at theta = 0 xi = sin(phi) / 3, near Eq. (16)'s plane-strain fit; at +30 deg the
+    compression cone."""
+    a = cos_t - sin_t * math.sin(phi) / SQRT3
+    return math.sin(phi) / (3.0 * a), c * math.cos(phi) / a
+
+
+@nb.njit(cache=True, inline="always")
+def lode_sin_cos(dxx, dyy, dzz, sxy, syz, szx, j2):
+    """(sin theta, cos theta) of the deviator's Lode angle, sin(3 theta) =
+    -(3 sqrt(3) / 2) J3 / J2^(3/2) (tension positive: +30 deg is triaxial compression);
+    theta = 0 where sqrt(J2) vanishes (the apex, where the cone's theta does not matter)."""
+    if not j2 > 0.0:
+        return 0.0, 1.0
+    j3 = dxx * (dyy * dzz - syz * syz) - sxy * (sxy * dzz - syz * szx) \
+        + szx * (sxy * syz - dyy * szx)
+    s3 = -1.5 * SQRT3 * j3 / (j2 * math.sqrt(j2))
+    theta = math.asin(min(max(s3, -1.0), 1.0)) / 3.0
+    return math.sin(theta), math.cos(theta)
 
 
 @nb.njit(cache=True, inline="always")
@@ -53,17 +81,17 @@ def _invariants(sxx, syy, szz, sxy, syz, szx):
 
 @nb.njit(cache=True)
 def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
-              s_f, tension=math.inf, eps_dilation=-1.0):
+              s_f, tension=math.inf, eps_dilation=-1.0, mohr_coulomb=False):
     """`dp_return_3d` in plane strain (yz = zx = 0): (sxx, syy, szz, sxy, d_lambda,
     d_eps_p, d_w)."""
     r = dp_return_3d(sxx, syy, szz, sxy, 0.0, 0.0, eps_p, bulk, shear, phi_p, phi_r, c_p,
-                     c_r, psi0, eta, s_f, tension, eps_dilation)
+                     c_r, psi0, eta, s_f, tension, eps_dilation, mohr_coulomb)
     return r[0], r[1], r[2], r[3], r[6], r[7], r[8]
 
 
 @nb.njit(cache=True)
 def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r,
-                 psi0, eta, s_f, tension=math.inf, eps_dilation=-1.0):
+                 psi0, eta, s_f, tension=math.inf, eps_dilation=-1.0, mohr_coulomb=False):
     """Return the trial stress to the Drucker-Prager surface.
 
     Returns (sxx, syy, szz, sxy, syz, szx, d_lambda, d_eps_p, d_w): the corrected stress, the
@@ -82,13 +110,27 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
     Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
     with the sign that keeps f = 0 to first order after the update (softening makes
     df/d eps_p > 0 and enlarges d_lambda); the denominator is kept positive.
+
+    mohr_coulomb: instead of Eq. (16)'s plane-strain cone, the cone through the
+    Mohr-Coulomb surface at the trial stress's Lode angle (`mc_constants`, for phi and
+    psi alike): every return here keeps the deviator's direction, so the Lode angle and
+    with it the cone are the trial's, and the returned stress lies on Mohr-Coulomb (a
+    return radial in the deviatoric plane). In plane strain at failure with psi = 0 the
+    Lode angle is 0 and xi = sin(phi) / 3; in triaxial compression the plane-strain cone
+    is the weaker by a third (phi = 30 deg: xi 0.160 against 0.231).
     """
     phi, c, psi = softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
     if eps_dilation >= 0.0:
         psi = psi0 * math.exp(-s_f * eps_dilation)
-    xi, kap = dp_constants(phi, c)
-    xi_psi = dp_constants(psi, 0.0)[0]
     i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)
+    sin_t, cos_t = 0.0, 1.0
+    if mohr_coulomb:
+        sin_t, cos_t = lode_sin_cos(dxx, dyy, dzz, sxy, syz, szx, j2)
+        xi, kap = mc_constants(phi, c, sin_t, cos_t)
+        xi_psi = mc_constants(psi, 0.0, sin_t, cos_t)[0]
+    else:
+        xi, kap = dp_constants(phi, c)
+        xi_psi = dp_constants(psi, 0.0)[0]
     rj2 = math.sqrt(j2)
     f = xi * i1 + rj2 - kap
     if not f > 0.0 and not i1 > 3.0 * tension:
@@ -99,11 +141,18 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
         decay = math.exp(-eta * eps_p)
         dphi = -eta * (phi_p - phi_r) * decay
         dc = -eta * (c_p - c_r) * decay
-        t = math.tan(phi)
-        d = math.sqrt(9.0 + 12.0 * t * t)
-        dt_dphi = 1.0 + t * t
-        dxi = dt_dphi * dphi * (1.0 / d - 12.0 * t * t / (d * d * d))
-        dkap = 3.0 * dc / d - 3.0 * c * 12.0 * t * dt_dphi * dphi / (d * d * d)
+        if mohr_coulomb:
+            sp, cp = math.sin(phi), math.cos(phi)
+            a = cos_t - sin_t * sp / SQRT3
+            da = -sin_t * cp / SQRT3 * dphi
+            dxi = (cp * dphi * a - sp * da) / (3.0 * a * a)
+            dkap = dc * cp / a - c * (sp * dphi * a + cp * da) / (a * a)
+        else:
+            t = math.tan(phi)
+            d = math.sqrt(9.0 + 12.0 * t * t)
+            dt_dphi = 1.0 + t * t
+            dxi = dt_dphi * dphi * (1.0 / d - 12.0 * t * t / (d * d * d))
+            dkap = 3.0 * dc / d - 3.0 * c * 12.0 * t * dt_dphi * dphi / (d * d * d)
         dfde = dxi * i1 - dkap
         elastic = 9.0 * bulk * xi * xi_psi + shear
         denom = elastic - dfde / math.sqrt(3.0)
@@ -142,7 +191,10 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
     d_eps = d_lam / math.sqrt(3.0)
     # the surface at the updated plastic strain
     phi, c, psi = softened(eps_p + d_eps, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
-    xi, kap = dp_constants(phi, c)
+    if mohr_coulomb:
+        xi, kap = mc_constants(phi, c, sin_t, cos_t)
+    else:
+        xi, kap = dp_constants(phi, c)
     i1, dxx, dyy, dzz, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)
     # tension cracking: beyond the apex I1 = kappa / xi, move the mean stress back to it
     if xi > 0.0 and xi * i1 > kap:

@@ -62,7 +62,8 @@ MAT_DP = 8  # 7 columns: phi_p, phi_r, c_p, c_r, psi_0, eta, s_f (Eq. 17-19, rad
 MAT_NL_LENGTH = MAT_DP + 7  # l_c of the non-local softening strain (m); 0: local
 MAT_NL_M = MAT_DP + 8  # its over-non-local weight m (psph/kernels/nonlocal_strain.py)
 MAT_TENSION = MAT_DP + 9  # tension cut-off of sigma'_m (Pa); inf: none (`dp_return`)
-MAT_COLUMNS = MAT_DP + 10
+MAT_MOHR_COULOMB = MAT_DP + 10  # 1: the Lode-dependent Mohr-Coulomb cone (`dp_return_3d`)
+MAT_COLUMNS = MAT_DP + 11
 
 
 @nb.njit(cache=True, inline="always")
@@ -337,7 +338,7 @@ def make_advance(dim: int):
                                   eps_soft[i], lam + 2.0 * shear / 3.0, shear, row[d],
                                   row[d + 1], row[d + 2], row[d + 3], row[d + 4], row[d + 5],
                                   row[d + 6], row[MAT_TENSION],
-                                  eps_p[i])
+                                  eps_p[i], row[MAT_MOHR_COULOMB] > 0.0)
                     stress[i, 0] = r[0]
                     stress[i, 1] = r[1]
                     stress[i, 2] = r[2]
@@ -356,7 +357,8 @@ def make_advance(dim: int):
                                       stress[i, 4], stress[i, 5], eps_soft[i],
                                       lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1],
                                       row[d + 2], row[d + 3], row[d + 4], row[d + 5],
-                                      row[d + 6], row[MAT_TENSION], eps_p[i])
+                                      row[d + 6], row[MAT_TENSION], eps_p[i],
+                                      row[MAT_MOHR_COULOMB] > 0.0)
                     for c in range(6):
                         stress[i, c] = r3[c]
                     eps_p[i] += r3[7]

@@ -12,6 +12,7 @@ from psph.kernels.update import (
     MAT_DP,
     MAT_K,
     MAT_LAM,
+    MAT_MOHR_COULOMB,
     MAT_N_MIN,
     MAT_NL_LENGTH,
     MAT_NL_M,
@@ -110,9 +111,10 @@ def material_table(scene) -> np.ndarray:
     Lame constants and 3K = 3 lambda + 2 mu (Eq. 11), rho_s (Eq. 24 with Eq. 8), k and
     C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
     (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19), with l_c and m of its
-    non-local softening strain (0: local; issue 17) and its tension cut-off (inf: none;
-    issue 13). The values are the same floats as the scalars the kernels took before
-    several materials (issue 16)."""
+    non-local softening strain (0: local; issue 17), its tension cut-off (inf: none;
+    issue 13) and 1 for the Lode-dependent Mohr-Coulomb cone (issue 37). The values are
+    the same floats as the scalars the kernels took before several materials (issue
+    16)."""
     mats = scene.material_list
     table = np.zeros((len(mats), MAT_COLUMNS))
     for i, m in enumerate(mats):
@@ -127,6 +129,8 @@ def material_table(scene) -> np.ndarray:
         table[i, MAT_PLASTIC] = 1.0 if m.model == "drucker_prager" else 0.0
         table[i, MAT_DP:MAT_DP + 7] = plasticity_parameters(scene, m)
         table[i, MAT_TENSION] = tension_cutoff(m)
+        if m.plasticity is not None and m.plasticity.surface == "mohr_coulomb":
+            table[i, MAT_MOHR_COULOMB] = 1.0
         reg = m.plasticity.regularisation if m.plasticity is not None else None
         if reg is not None:
             table[i, MAT_NL_LENGTH] = reg.length
