@@ -13,7 +13,7 @@ H = 1.2 * DX
 RHO = 2000.0
 
 
-def _contact(x, v, weight_dv, stress=None):
+def _contact(x, v, weight_dv, stress=None, rho_water=0.0):
     """boundary_contact of particles x (2D or 3D) over a floor (z = 0, y = 0 in 2D) lined
     with one boundary particle dx/2 under each (normal up). Returns (x, v) after it."""
     n, dim = x.shape
@@ -38,7 +38,7 @@ def _contact(x, v, weight_dv, stress=None):
     boundary_contact(n, allx, vv, np.zeros_like(allx), n, n, np.arange(n), normal, foot,
                      origin, cell, lo, ncell, cell_start, order, H, np.full(n, weight_dv),
                      DX, _stress(stress, n, dim), np.full(2 * n, RHO),
-                     np.full(n, 0.5 * 9.81 * DX))
+                     np.full(n, 0.5 * 9.81 * DX), rho_water)
     return allx[:n], vv[:n]
 
 
@@ -101,3 +101,26 @@ def test_the_share_in_2d():
     v = np.tile([1.0, 0.0], (3, 1))
     _, out = _contact(x, v, 0.1, stress=[-half, -0.5 * half, 0.0])
     assert np.allclose(out[:, 0], [1.0, 0.95, 0.9], rtol=0, atol=1e-12)
+
+
+
+def test_a_saturated_particle_counts_its_buoyant_weight():
+    """With pore water (rho_water = rho_l) the share compares sigma'_nn with the buoyant
+    weight (rho - rho_l) g dx / 2, and the friction acts on it: dv (rho - rho_l) / rho."""
+    def vx(szz, rho_water):
+        x = np.array([[0.0, 0.0, 0.025]])
+        v = np.array([[1.0, 0.0, 0.0]])
+        return _contact(x, v, 0.1, stress=szz, rho_water=rho_water)[1][0, 0]
+
+    buoyant = (RHO - 1000.0) / RHO
+    # at the apex: all of the buoyant weight's friction
+    assert vx(0.0, 1000.0) == 1.0 - 0.1 * buoyant
+    # sigma'_nn holding a quarter of the buoyant half weight: three quarters of it
+    quarter = -0.25 * (RHO - 1000.0) * 0.5 * 9.81 * DX
+    assert np.isclose(vx(quarter, 1000.0), 1.0 - 0.75 * 0.1 * buoyant, rtol=0, atol=1e-15)
+    # the same stress holds only an eighth of the dry particle's half weight
+    assert np.isclose(vx(quarter, 0.0), 1.0 - 0.875 * 0.1, rtol=0, atol=1e-15)
+    # the buoyant half weight carried: no friction (the dry rule would still add some)
+    held = -(RHO - 1000.0) * 0.5 * 9.81 * DX
+    assert vx(held, 1000.0) == 1.0
+    assert vx(held, 0.0) < 1.0

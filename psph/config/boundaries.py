@@ -57,7 +57,8 @@ class _RigidWall(_Model):
         False, description="true: a soil particle within dx of the wall also loses, each "
         "step, up to tan(φ_b) g_n Δt of its velocity along the wall (the Coulomb friction of "
         "its own weight, g_n the body force into the wall), for the share of that weight "
-        "its own normal stress does not carry; needs motion = \"friction\"")
+        "its own normal stress does not carry (the buoyant weight in a saturated scene); "
+        "needs motion = \"friction\"")
 
 
 class Polyline(_RigidWall):

@@ -183,7 +183,7 @@ def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x,
 @nb.njit(cache=True)
 def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
                      grid_lo, ncell, cell_start, order, h, weight_dv, reach, stress, rho,
-                     half_weight):
+                     half_weight, rho_water=0.0):
     """No penetration (safety net): an owned particle found on the wall side of the line
     (in 3D the tangent plane) of its nearest boundary particle (within 2h, in the cell
     lists of this step) is reflected back across it, (x - foot) . n -> -(x - foot) . n,
@@ -197,7 +197,10 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
     (rho half_weight[k]) the share of its weight its own normal stress does not carry
     (half_weight = g_n dx / 2: none once sigma'_nn holds half a particle's weight, which
     the wall's stress-based limit then counts, `boundary_3d`; all of it at the
-    Drucker-Prager apex, the film of docs/vv/collapse_3d.md)."""
+    Drucker-Prager apex, the film of docs/vv/collapse_3d.md). In a saturated scene
+    (rho_water = rho_l; 0 when dry) both count the buoyant weight, rho - rho_l: the
+    effective stress carries it and the Coulomb friction acts on it, the pore pressure
+    carries the water's share; dv is then scaled by (rho - rho_l) / rho."""
     three = x.shape[1] == 3
     ncx = ncell[0]
     ncy = ncell[1]
@@ -261,9 +264,11 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
             # holds half a particle's weight, rho g_n dx / 2 (the wall's stress-based
             # Coulomb limit then counts its weight: `boundary_3d`)
             snn = _normal_stress(stress, i, normal, k)
-            share = 1.0 - max(-snn, 0.0) / (rho[i] * half_weight[k])
-            if share > 0.0:
-                _coulomb_weight(v, i, normal, k, share * weight_dv[k])
+            buoyant = rho[i] - rho_water
+            if buoyant > 0.0:
+                share = 1.0 - max(-snn, 0.0) / (buoyant * half_weight[k])
+                if share > 0.0:
+                    _coulomb_weight(v, i, normal, k, share * weight_dv[k] * (buoyant / rho[i]))
     return moved
 
 

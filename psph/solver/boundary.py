@@ -102,6 +102,11 @@ class BoundaryParticles:
         self.weight_friction = np.where(np.concatenate(weight), self.tan_phi * g_n, 0.0)
         self.weight_dv = np.zeros_like(self.weight_friction)
         self.half_weight = 0.5 * g_n * dx  # per unit density: rho g_n dx / 2
+        # in a saturated scene the effective stress carries the buoyant weight, and the
+        # wall's Coulomb friction acts on it: rho - rho_l (the water's share is the pore
+        # pressure's)
+        self.rho_water = scene.material_list[0].rho_l if scene.pressure.scheme != "none" \
+            else 0.0
         self.reach = dx
         self.key = key_base + np.arange(len(self.x), dtype=float)
         self.cell_volume = dx ** self.dim
@@ -168,4 +173,4 @@ class BoundaryParticles:
         return boundary_contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
                                 self.normal, self.foot, origin, cell_size, grid_lo, ncell,
                                 cell_start, order, self.h, self.weight_dv, self.reach,
-                                st.stress, st.rho, self.half_weight)
+                                st.stress, st.rho, self.half_weight, self.rho_water)
