@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from psph.app.floor_friction import DRY_SAND
 from psph.app.run import run
 from psph.config.load import resolve, validate
 from psph.io.snapshots import read_snapshots
@@ -39,20 +40,7 @@ dx = {dx}
 [[particles.blocks]]
 min = [0.0, 0.0]
 max = [4.0, {h}]
-[material]
-model = "drucker_prager"
-E = 20.0e6
-nu = 0.3
-porosity = 0.4
-rho_s = 2650.0
-k = 1.0e-3
-[material.plasticity]
-phi = 30.0
-c = {c}
-c_r = {c}
-eta = 0.0
-psi = 0.0
-[boundaries]
+""" + DRY_SAND.lstrip("\n") + """[boundaries]
 left = {{ motion = "slip" }}
 bottom = {{ motion = "fixed" }}
 [initial]

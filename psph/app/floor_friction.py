@@ -23,17 +23,9 @@ from psph.solver.simulation import Simulation
 DX = 0.05
 PHI_B = 30.0
 C = 2.0e3  # the block's cohesion: it does not slump, and slides on the floor
-SCENE = """
-name = "surface_floor_sliding"
-gravity = [0.0, 0.0, -9.81]
-[domain]
-min = [-0.5, 0.0, 0.0]
-max = [6.0, 0.3, 1.0]
-[particles]
-dx = {dx}
-[[particles.blocks]]
-min = [0.0, 0.0, 0.0]
-max = [1.0, 0.3, {h}]
+# the dry sand of collapse_3d (phi = 30 degrees, psi = 0) with a cohesion {c} (Pa), as a
+# `str.format` template; bench/diagnostics/thin_layer_friction.py shares it
+DRY_SAND = """
 [material]
 model = "drucker_prager"
 E = 20.0e6
@@ -47,7 +39,19 @@ c = {c}
 c_r = {c}
 eta = 0.0
 psi = 0.0
-[boundaries]
+"""
+SCENE = """
+name = "surface_floor_sliding"
+gravity = [0.0, 0.0, -9.81]
+[domain]
+min = [-0.5, 0.0, 0.0]
+max = [6.0, 0.3, 1.0]
+[particles]
+dx = {dx}
+[[particles.blocks]]
+min = [0.0, 0.0, 0.0]
+max = [1.0, 0.3, {h}]
+""" + DRY_SAND.lstrip("\n") + """[boundaries]
 front = {{ motion = "slip" }}
 back = {{ motion = "slip" }}
 [[boundaries.surfaces]]
