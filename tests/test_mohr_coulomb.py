@@ -96,9 +96,37 @@ def test_softening_ends_on_the_softened_mohr_coulomb_surface():
             assert abs(f_after) < 0.02 * mohr_coulomb(trial, PHI, C)
 
 
-def test_the_flag_leaves_the_plane_strain_return_alone():
-    """The default return is Eq. (16)'s cone, and the flag's branch does not move its
-    bits; the Mohr-Coulomb cone is the stronger in triaxial compression."""
+def test_the_softening_multiplier_is_eq13_with_the_cone_s_derivative():
+    """With softening, d_lambda = f / (G - (d xi / d eps I1 - d kappa / d eps) / sqrt(3))
+    (psi = 0, Eq. 13), the derivative of `mc_constants` at the trial's Lode angle through
+    Eq. (17)-(18): here by central differences."""
+    from psph.kernels.plasticity import softened
+
+    phi_r, c_r, eta, eps0 = math.radians(20.0), 1e3, 30.0, 0.01
+    trial = (-60e3, -90e3, -200e3, 20e3, -10e3, 5e3)
+    s = np.array(trial)
+    d = s.copy()
+    d[:3] -= s[:3].mean()
+    j2 = 0.5 * np.sum(d[:3] ** 2) + np.sum(d[3:] ** 2)
+    st, ct = lode_sin_cos(*d, j2)
+    i1 = s[:3].sum()
+
+    def f_at(eps):
+        phi, c, _ = softened(eps, PHI, phi_r, C, c_r, 0.0, eta, 0.0)
+        xi, kap = mc_constants(phi, c, st, ct)
+        return xi * i1 + math.sqrt(j2) - kap
+
+    step = 1e-7
+    dfde = (f_at(eps0 + step) - f_at(eps0 - step)) / (2 * step)
+    out = ret(trial, eps=eps0, phi_r=phi_r, c_r=c_r, eta=eta)
+    assert f_at(eps0) > 1e3 and dfde > 0.0
+    assert out[6] == pytest.approx(f_at(eps0) / (G - dfde / math.sqrt(3)), rel=1e-6)
+
+
+def test_the_default_is_the_plane_strain_cone():
+    """The default return is Eq. (16)'s cone (flag off; its bits against the commit
+    before: tests/test_plasticity.py, `..._paper_law_bit_for_bit`); the Mohr-Coulomb
+    cone is the stronger in triaxial compression."""
     trial = (-60e3, -60e3, -200e3, 0.0, 0.0, 0.0)  # triaxial compression, outside both
     plane = ret(trial, mc=False)
     mc = ret(trial)

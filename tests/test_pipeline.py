@@ -33,6 +33,8 @@ def _stages(overrides):
     (["pressure.scheme='none'", "stabilisation.shepard_every=20",
       "stabilisation.shepard_stress=true", "stabilisation.stress_filter='mls'"],
      ["mls_stress[every 20]"], ["pressure", "shepard"]),
+    (["pressure.scheme='none'", "stabilisation.shepard_every=20",
+      "stabilisation.shepard_stress=true"], ["shepard_stress[every 20]"], ["pressure"]),
     (["material.model='drucker_prager'", "material.plasticity.phi=30.0"],
      ["update[explicit->tpi,drucker_prager]"], ["elastic"]),
     (["boundaries.left.motion='free'", "boundaries.right.motion='free'",

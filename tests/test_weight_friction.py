@@ -120,7 +120,21 @@ def test_a_saturated_particle_counts_its_buoyant_weight():
     assert np.isclose(vx(quarter, 1000.0), 1.0 - 0.75 * 0.1 * buoyant, rtol=0, atol=1e-15)
     # the same stress holds only an eighth of the dry particle's half weight
     assert np.isclose(vx(quarter, 0.0), 1.0 - 0.875 * 0.1, rtol=0, atol=1e-15)
-    # the buoyant half weight carried: no friction (the dry rule would still add some)
-    held = -(RHO - 1000.0) * 0.5 * 9.81 * DX
+    # the buoyant half weight carried (a little more, clear of round-off): no friction
+    # (the dry rule would still add some)
+    held = -1.01 * (RHO - 1000.0) * 0.5 * 9.81 * DX
     assert vx(held, 1000.0) == 1.0
     assert vx(held, 0.0) < 1.0
+
+
+def test_the_wall_takes_the_pore_water_density_only_in_a_saturated_scene():
+    """`BoundaryParticles.rho_water`: rho_l when the scene solves a pore pressure, 0 when
+    dry (the buoyant weight of `boundary_contact`)."""
+    from psph.config.load import load_scene
+    from psph.solver.boundary import BoundaryParticles
+
+    dry = load_scene("collapse_3d", ["particles.dx=0.1"])
+    wet = load_scene("collapse_3d", ["particles.dx=0.1", "pressure.scheme='tpi'",
+                                     "material.rho_l=1020.0"])
+    assert BoundaryParticles(dry, 1e9).rho_water == 0.0
+    assert BoundaryParticles(wet, 1e9).rho_water == 1020.0

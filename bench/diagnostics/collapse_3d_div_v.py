@@ -5,7 +5,9 @@ rate with `stabilisation.corrected_strain_rate = false`), and from the corrected
 Eq. (22), L_c = L_p M^-1, exact for linear fields. Their traces' difference, binned by
 the particle's support (the trace of the moment matrix M: 3 in the bulk, about 1.5 at a
 flat free surface), over the particles shearing at more than 0.5 /s and more than 2h
-above the floor (whose boundary particles the snapshot does not hold).
+above the floor (whose boundary particles the snapshot does not hold). The symmetry
+planes (`left`, `front` with `symmetry = true`, at the domain's low x and y) are mirrored as the
+solver's ghosts are, so only free surfaces cut a support.
 
     .venv/bin/python bench/diagnostics/collapse_3d_div_v.py runs/collapse_3d_a3 [--snapshot 1]
 
@@ -21,10 +23,26 @@ import numpy as np
 from psph.config.load import run_scene
 
 
-def gradients(x, v, vol, h):
+def with_mirrors(x, v, vol, planes):
+    """x, v, vol with the images across the symmetry planes ((axis, position) pairs), as
+    the solver's mirror ghosts: the position and velocity components normal to a plane
+    flip; across two planes, also the image of the image."""
+    xs, vs, ws = [x], [v], [vol]
+    for axis, at in planes:
+        for k in range(len(xs)):
+            xm, vm = xs[k].copy(), vs[k].copy()
+            xm[:, axis] = 2.0 * at - xm[:, axis]
+            vm[:, axis] *= -1.0
+            xs.append(xm)
+            vs.append(vm)
+            ws.append(ws[k])
+    return np.concatenate(xs), np.concatenate(vs), np.concatenate(ws)
+
+
+def gradients(x, v, vol, h, n):
     """(L_p, M): the plain velocity gradient and the moment matrix, (n, 3, 3) each, of the
-    cubic spline of Eq. (21) in 3D (support 2h), over all particles of x."""
-    n = len(x)
+    cubic spline of Eq. (21) in 3D (support 2h), of the first n particles of x over all of
+    x (the particles and their images)."""
     a = 3.0 / (2.0 * np.pi) / h ** 4
     lp = np.zeros((n, 3, 3))
     m = np.zeros((n, 3, 3))
@@ -37,7 +55,7 @@ def gradients(x, v, vol, h):
                       np.where(q < 2, -0.5 * a * (2 - q) ** 2, 0.0))
         with np.errstate(invalid="ignore", divide="ignore"):
             gw = np.where(r[..., None] > 0, -dw[..., None] * d / r[..., None], 0.0)
-        w = np.broadcast_to(vol[None, :], (i1 - i0, n))
+        w = np.broadcast_to(vol[None, :], (i1 - i0, len(x)))
         lp[i0:i1] = np.einsum("ij,ija,ijb->iab", w, v[None, :, :] - v[i0:i1, None, :], gw)
         m[i0:i1] = np.einsum("ij,ija,ijb->iab", w, d, gw)
     return lp, m
@@ -55,7 +73,10 @@ def main() -> None:
         g = f["snapshots"][name]
         x, v, vol = g["x"][:], g["v"][:], g["vol"][:]
         t = float(g.attrs["time"])
-    lp, m = gradients(x, v, vol, h)
+    planes = [(axis, scene.domain.min[axis]) for axis, side in enumerate(("left", "front"))
+              if getattr(scene.boundaries, side) is not None
+              and getattr(scene.boundaries, side).symmetry]
+    lp, m = gradients(*with_mirrors(x, v, vol, planes), h, len(x))
     lc = lp @ np.linalg.inv(m)
     tr_p = np.trace(lp, axis1=1, axis2=2)
     tr_c = np.trace(lc, axis1=1, axis2=2)

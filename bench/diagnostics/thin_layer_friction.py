@@ -40,7 +40,7 @@ dx = {dx}
 [[particles.blocks]]
 min = [0.0, 0.0]
 max = [4.0, {h}]
-""" + DRY_SAND.lstrip("\n") + """[boundaries]
+""" + DRY_SAND + """[boundaries]
 left = {{ motion = "slip" }}
 bottom = {{ motion = "fixed" }}
 [initial]

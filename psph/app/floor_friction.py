@@ -23,10 +23,10 @@ from psph.solver.simulation import Simulation
 DX = 0.05
 PHI_B = 30.0
 C = 2.0e3  # the block's cohesion: it does not slump, and slides on the floor
-# the dry sand of collapse_3d (phi = 30 degrees, psi = 0) with a cohesion {c} (Pa), as a
-# `str.format` template; bench/diagnostics/thin_layer_friction.py shares it
-DRY_SAND = """
-[material]
+# collapse_3d's dry sand (E, phi = 30 degrees, psi = 0) on the plane-strain cone, with a
+# cohesion {c} (Pa), as a `str.format` template; bench/diagnostics/thin_layer_friction.py
+# shares it
+DRY_SAND = """[material]
 model = "drucker_prager"
 E = 20.0e6
 nu = 0.3
@@ -51,7 +51,7 @@ dx = {dx}
 [[particles.blocks]]
 min = [0.0, 0.0, 0.0]
 max = [1.0, 0.3, {h}]
-""" + DRY_SAND.lstrip("\n") + """[boundaries]
+""" + DRY_SAND + """[boundaries]
 front = {{ motion = "slip" }}
 back = {{ motion = "slip" }}
 [[boundaries.surfaces]]

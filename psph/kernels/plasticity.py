@@ -5,11 +5,13 @@ Stress components (xx, yy, zz, xy, yz, zx), effective, tension positive; plane s
 the case yz = zx = 0 (`dp_return`, the same bits as before the 3D components: they only
 add zeros to J2). Yield function Eq. (14)
 f = xi_phi I1 + sqrt(J2) - kappa_c and plastic potential Eq. (15) g = xi_psi I1 +
-sqrt(J2), with the plane-strain constants of Eq. (16) and the softening laws of
-Eq. (17)-(19) in the equivalent plastic strain. The return mapping is the semi-implicit
-one of Bui et al. (2008) (the paper's ref. [3]): one plastic corrector with the multiplier
-of Eq. (13), then the tension-cracking treatment at the apex and the scaling back of the
-deviator onto the surface, so that no state ends outside it and none is NaN.
+sqrt(J2), with the plane-strain constants of Eq. (16) (or, with `mohr_coulomb`, the cone
+through Mohr-Coulomb at each trial stress's Lode angle: `mc_constants`, issue 37) and the
+softening laws of Eq. (17)-(19) in the equivalent plastic strain. The return mapping is
+the semi-implicit one of Bui et al. (2008) (the paper's ref. [3]): one plastic corrector
+with the multiplier of Eq. (13), then the tension-cracking treatment at the apex and the
+scaling back of the deviator onto the surface, so that no state ends outside it and none
+is NaN.
 An optional tension cut-off (`plasticity.tension_cutoff`, issue 13) caps the mean
 effective stress at t below the apex c cot(phi) with the same shift: without it a
 contractive soil (psi < 0) at low confinement flows undrained until sigma'_m is tensile
@@ -117,7 +119,9 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
     with it the cone are the trial's, and the returned stress lies on Mohr-Coulomb (a
     return radial in the deviatoric plane). In plane strain at failure with psi = 0 the
     Lode angle is 0 and xi = sin(phi) / 3; in triaxial compression the plane-strain cone
-    is the weaker by a third (phi = 30 deg: xi 0.160 against 0.231).
+    is the weaker by a third (phi = 30 deg: xi 0.160 against 0.231). The flow stays
+    radial in the deviatoric plane (it ignores d a / d theta), so psi = phi is not the
+    associated Mohr-Coulomb flow.
     """
     phi, c, psi = softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
     if eps_dilation >= 0.0:
@@ -231,7 +235,8 @@ def plastic_work_increment(sxx, syy, szz, sxy, syz, szx, d_lam, xi_psi):
     """sigma : d eps_p (J/m^3) of one return: d eps_p = d_lambda dg/dsigma with the
     potential g = xi_psi I1 + sqrt(J2) of Eq. (15), homogeneous of degree 1 in sigma, so
     sigma : dg/dsigma = g and d_w = d_lambda (xi_psi I1 + sqrt(J2)) at the returned stress
-    (xi_psi of Eq. 16 at the softened psi of Eq. 19 that set the flow direction)."""
+    (xi_psi of Eq. 16, or of `mc_constants`, at the softened psi of Eq. 19 that set the
+    flow direction)."""
     if d_lam == 0.0:
         return 0.0
     i1, _, _, _, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)

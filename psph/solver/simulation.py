@@ -213,7 +213,8 @@ class Simulation(Stages):
         if m > 0 and (self.coupled or stab.shepard_stress):
             names = ["shepard"] if self.coupled else []
             if stab.shepard_stress:
-                names.append("stress" if stab.stress_filter == "shepard" else "mls_stress")
+                shepard = "stress" if self.coupled else "shepard_stress"
+                names.append(shepard if stab.stress_filter == "shepard" else "mls_stress")
             stages.append(Stage(f"{'+'.join(names)}[every {m}]", self._shepard, every=m))
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
