@@ -200,7 +200,8 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
     Drucker-Prager apex, the film of docs/vv/collapse_3d.md). In a saturated scene
     (rho_water = rho_l; 0 when dry) both count the buoyant weight, rho - rho_l: the
     effective stress carries it and the Coulomb friction acts on it, the pore pressure
-    carries the water's share; dv is then scaled by (rho - rho_l) / rho."""
+    carries the water's share (a hydrostatic p; above a water table, p = 0, this
+    undercounts); dv is then scaled by (rho - rho_l) / rho."""
     three = x.shape[1] == 3
     ncx = ncell[0]
     ncy = ncell[1]
