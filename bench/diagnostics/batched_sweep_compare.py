@@ -44,7 +44,7 @@ def main() -> None:
     from psph.kernels.interactions import pair_sums_3d
     from psph.solver.simulation import Simulation
 
-    scene = resolve(validate(tomllib.loads(throughput.BLOCK_3D.format(n=16000, w=0.2,
+    scene = resolve(validate(tomllib.loads(throughput.BLOCK_3D.format(n=16000, w=0.2, hf=1.3,
                                                                        hgt=0.4))))
     sim = Simulation(scene, make_slabs(scene, MPI.COMM_WORLD))
     for _ in range(3):

@@ -33,7 +33,7 @@ def main() -> None:
     from psph.config.load import resolve, validate
     from psph.solver.simulation import Simulation
 
-    text = throughput.BLOCK_3D.format(n=16000, w=0.2, hgt=0.4)
+    text = throughput.BLOCK_3D.format(n=16000, w=0.2, hgt=0.4, hf=1.3)
     scene = resolve(validate(tomllib.loads(text)))
     sim = Simulation(scene, make_slabs(scene, MPI.COMM_WORLD))
     for _ in range(3):

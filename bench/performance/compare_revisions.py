@@ -73,8 +73,8 @@ def main() -> None:
         shutil.rmtree(tmp, ignore_errors=True)
     rows = []
     for (ranks, case, name), rate in sorted(best.items()):
-        if name != "before":
-            continue
+        if name != "before" or (ranks, case, "after") not in best:
+            continue  # a case that one of the two revisions does not have
         after = best[(ranks, case, "after")]
         rows.append({"ranks": ranks, "case": case, "before": rate, "after": after,
                      "ratio": after / rate})

@@ -40,7 +40,7 @@ def worker(cuts: str) -> None:
     from psph.solver.simulation import Simulation
 
     comm = MPI.COMM_WORLD
-    text = throughput.BLOCK_3D.format(n=54000, w=0.3, hgt=0.6) + \
+    text = throughput.BLOCK_3D.format(n=54000, w=0.3, hgt=0.6, hf=1.3) + \
         f'\n[decomposition]\ncuts = "{cuts}"\nrebalance_every = 0\n'
     scene = resolve(validate(tomllib.loads(text)))
     sim = Simulation(scene, make_slabs(scene, comm))

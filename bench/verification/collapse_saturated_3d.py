@@ -5,9 +5,12 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
     python bench/verification/collapse_saturated_3d.py             # runs all six (~2.5 h)
     python bench/verification/collapse_saturated_3d.py --psi 0     # one angle
     python bench/verification/collapse_saturated_3d.py --reuse     # tables finished runs
+    python bench/verification/collapse_saturated_3d.py --psi -5 --dx 0.08 --end 0.9
+                                        # both at another dx (the slab stays 4 dx thick)
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
-runs/collapse_saturated_3d/psi<psi>_2d and _3d (`--reuse` keeps a finished one). Compared:
+runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
+and _3d, and the JSON and PNG named so; `--reuse` keeps a finished one). Compared:
 the run-out at the end (`metrics.collapse.runout_m`, the toe's 99.8th percentile of x
 minus the initial front) and the largest 99th percentile of |excess p| over the snapshots
 (`metrics.pressure_quality.over_run.abs_excess_p99_max_Pa`; the slab's are read in its x-z
@@ -84,12 +87,26 @@ def main() -> None:
     ap.add_argument("--psi", nargs="*", default=list(PSIS), choices=PSIS)
     ap.add_argument("--np", type=int, default=2, help="ranks of the 3D runs")
     ap.add_argument("--reuse", action="store_true", help="keep finished runs")
+    ap.add_argument("--dx", type=float, help="particle spacing of both runs (scene: 0.04 m)")
+    ap.add_argument("--end", type=float, help="end time of both runs (scene: 1.2 s)")
     args = ap.parse_args()
+    common, tag = [], ""
+    if args.dx is not None:
+        thick = 4 * args.dx  # the slab 4 dx thick, as the scene
+        common.append(f"particles.dx={args.dx}")
+        slab = [f"domain.max.1={thick}", f"particles.blocks.0.max.1={thick}"]
+        tag += f"_dx{args.dx:g}"
+    else:
+        slab = []
+    if args.end is not None:
+        common.append(f"time.end={args.end}")
+        tag += f"_end{args.end:g}"
     rows = {}
     for psi in args.psi:
-        s2 = run(RUNS / f"psi{psi}_2d", f"collapse_saturated_psi{psi}", 1, [], args.reuse)
-        s3 = run(RUNS / f"psi{psi}_3d", "collapse_saturated_3d", args.np,
-                 plasticity_settings(psi), args.reuse)
+        s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
+                 args.reuse)
+        s3 = run(RUNS / f"psi{psi}{tag}_3d", "collapse_saturated_3d", args.np,
+                 plasticity_settings(psi) + common + slab, args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
         rows[psi] = {"2d": r2, "3d": r3,
                      "runout_rel": r3["runout_m"] / r2["runout_m"] - 1.0,
@@ -104,11 +121,12 @@ def main() -> None:
               f"{r['3d']['abs_excess_p99_max_Pa'] / 1e3:7.2f} "
               f"{100 * r['abs_excess_p99_rel']:+6.1f}% {'yes' if ok else 'NO':>10s}")
     OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "collapse_saturated_3d.json").write_text(json.dumps(
-        {"date": date.today().isoformat(), "machine": platform.platform(), "rows": rows},
-        indent=1) + "\n")
-    plot(rows, OUT / "collapse_saturated_3d.png")
-    print(f"wrote {OUT / 'collapse_saturated_3d.json'} and .png")
+    name = f"collapse_saturated_3d{tag}"
+    (OUT / f"{name}.json").write_text(json.dumps(
+        {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
+         "end": args.end, "rows": rows}, indent=1) + "\n")
+    plot(rows, OUT / f"{name}.png")
+    print(f"wrote {OUT / name}.json and .png")
 
 
 if __name__ == "__main__":
