@@ -241,7 +241,10 @@ def plot() -> None:
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     for run in runs:
         blocks = [r for r in run["rows"] if r["case"].startswith("coupled")]
-        blocks_3d = [r for r in run["rows"] if r["case"].startswith("3D")]
+        blocks_3d = [r for r in run["rows"] if r["case"].startswith("3D coupled")
+                     and r.get("h_factor", 1.3) == 1.3]
+        others_3d = [r for r in run["rows"] if r["case"].startswith("3D")
+                     and r not in blocks_3d]
         col = [r for r in run["rows"] if r["case"].startswith("Terzaghi")]
         a1.plot([r["particles"] for r in blocks],
                 [r["particle_steps_per_s_per_core"] / 1e6 for r in blocks], "o-",
@@ -249,14 +252,19 @@ def plot() -> None:
         if blocks_3d:
             a1.plot([r["particles"] for r in blocks_3d],
                     [r["particle_steps_per_s_per_core"] / 1e6 for r in blocks_3d], "s--",
-                    label=f"{run['ranks']} rank(s), 3D (elastic, collapse)")
+                    label=f"{run['ranks']} rank(s), 3D elastic")
+        for r, m in zip(others_3d, "^v<>", strict=False):
+            what = "collapse" if "collapse" in r["case"] else "elastic, h = 1.2 dx"
+            a1.plot(r["particles"], r["particle_steps_per_s_per_core"] / 1e6, m,
+                    label=f"{run['ranks']} rank(s), 3D {what}")
         a2.bar(str(run["ranks"]), col[0]["steps_per_s"])
     a1.axhline(1.0, ls="--", c="grey", label="bar: 1e6")
+    a1.axhline(0.5, ls=":", c="grey", label="3D coupled bar: 0.5e6")
     a1.set_xscale("log")
     a1.set_xlabel("particles")
     a1.set_ylabel("million particle-steps / s / core")
-    a1.legend()
-    a1.set_title("coupled elastic TPI step (h = 1.3 dx); 3D collapse step")
+    a1.legend(fontsize=7, loc="center right")
+    a1.set_title("coupled elastic TPI step (h = 1.3 dx unless marked); 3D collapse")
     a2.axhline(1500, ls="--", c="grey")
     a2.set_xlabel("ranks")
     a2.set_ylabel("steps / s")
