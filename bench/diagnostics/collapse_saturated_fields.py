@@ -9,8 +9,8 @@ RUN is an output directory of `psph run collapse_saturated_psi<psi>` or of
 `collapse_saturated_3d` (`bench/verification/collapse_saturated_3d.py` writes them under
 runs/collapse_saturated_3d/). A slab is read in its x-z plane (`plane_strain_view`), as
 the bench's metrics are. Per snapshot: the 50th, 95th and 99th percentiles of |excess p|
-and its mean (kPa), the mean accumulated plastic strain, the mean porosity change and the
-share of particles that have yielded.
+and the mean of the signed excess p (kPa), the mean accumulated plastic strain, the mean
+porosity change and the share of particles that have yielded.
 """
 
 import sys

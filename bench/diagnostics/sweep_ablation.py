@@ -11,7 +11,9 @@ worktree: `git worktree add /tmp/x HEAD && git -C /tmp/x apply $PWD/bench/diagno
 sweep_ablation_<name>.patch`, then this script with `PYTHONPATH=/tmp/x`:
 `no_a_side` (a's sums not accumulated), `no_sums` (no sums, the pair's arithmetic kept
 alive by one sum), `candidates_only` (the candidate loop and the distance test). Their
-results are wrong by construction; only the time counts. Compare in the same minute (this
+results are wrong by construction; only the time counts. `sweep_a_side_registers.patch`
+(applied the same way) is a variant with the same sums: a's shares of its forward pairs
+held in tuples and written once after them. Compare in the same minute (this
 VM drifts): pause other runs (kill -STOP) while measuring.
 """
 

@@ -64,7 +64,7 @@ def main() -> None:
                         key = (ranks, row["case"], name)
                         rate = row["particle_steps_per_s_per_core"]
                         best[key] = max(best.get(key, 0.0), rate)
-                        print(f"repeat {rep + 1} ranks {ranks} {name:6s} {row['case']:44s} "
+                        print(f"repeat {rep + 1} ranks {ranks} {name:6s} {row['case']:58s} "
                               f"{rate:12,.0f}", flush=True)
     finally:
         for tree in trees.values():
@@ -73,14 +73,17 @@ def main() -> None:
         shutil.rmtree(tmp, ignore_errors=True)
     rows = []
     for (ranks, case, name), rate in sorted(best.items()):
-        if name != "before" or (ranks, case, "after") not in best:
-            continue  # a case that one of the two revisions does not have
+        if name != "before":
+            continue
+        if (ranks, case, "after") not in best:
+            print(f"only before: {ranks} rank(s), {case}")
+            continue
         after = best[(ranks, case, "after")]
         rows.append({"ranks": ranks, "case": case, "before": rate, "after": after,
                      "ratio": after / rate})
-    print(f"\n{'ranks':>5s} {'case':44s} {'before':>12s} {'after':>12s} {'after/before':>12s}")
+    print(f"\n{'ranks':>5s} {'case':58s} {'before':>12s} {'after':>12s} {'after/before':>12s}")
     for r in rows:
-        print(f"{r['ranks']:5d} {r['case']:44s} {r['before']:12,.0f} {r['after']:12,.0f} "
+        print(f"{r['ranks']:5d} {r['case']:58s} {r['before']:12,.0f} {r['after']:12,.0f} "
               f"{r['ratio']:12.3f}")
     print("(particle-steps / s / core, best of the repeats)")
     OUT.mkdir(exist_ok=True)

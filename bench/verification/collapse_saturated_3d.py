@@ -10,7 +10,9 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
-and _3d, and the JSON and PNG named so; `--reuse` keeps a finished one). Compared:
+and _3d, and the JSON and PNG named so; `--reuse` keeps a finished one; `--dx` leaves
+`initial.water_table` at the scenes' 1.98 m, the top row's centre at dx = 0.04 m, in both
+runs alike). Compared:
 the run-out at the end (`metrics.collapse.runout_m`, the toe's 99.8th percentile of x
 minus the initial front) and the largest 99th percentile of |excess p| over the snapshots
 (`metrics.pressure_quality.over_run.abs_excess_p99_max_Pa`; the slab's are read in its x-z
@@ -59,7 +61,7 @@ def numbers(s: dict) -> dict:
                        "abs_excess_p99_Pa": q["series"]["abs_excess_p99_Pa"]}}
 
 
-def plot(rows: dict, path: Path) -> None:
+def plot(rows: dict, path: Path, tag: str = "") -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -77,7 +79,8 @@ def plot(rows: dict, path: Path) -> None:
     ax1.set(xlabel="t (s)", ylabel="run-out (m)", title="run-out")
     ax2.set(xlabel="t (s)", ylabel="p99 of |excess p| (kPa)", title="99th percentile of |excess p|")
     ax1.legend(fontsize=7)
-    fig.suptitle("collapse_saturated_3d (slab 4 dx thick, slip walls) against the 2D scenes")
+    fig.suptitle("collapse_saturated_3d (slab 4 dx thick, slip walls) against the 2D scenes"
+                 + (f" ({tag.strip('_')})" if tag else ""))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
@@ -125,7 +128,7 @@ def main() -> None:
     (OUT / f"{name}.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
          "end": args.end, "rows": rows}, indent=1) + "\n")
-    plot(rows, OUT / f"{name}.png")
+    plot(rows, OUT / f"{name}.png", tag)
     print(f"wrote {OUT / name}.json and .png")
 
 
