@@ -718,3 +718,54 @@ def test_particle_shifting_in_3d():
     assert np.abs(shift[under_edge][:, [0, 2]]).max() < 1e-9 * cap
     # ... where the unprojected shift, down grad C, points out through both faces
     assert np.all(grad_c[under_edge][:, [0, 2]] < -1e-3 * np.abs(grad_c).max())
+
+
+def _viscous_acceleration(dim, alpha, c, k):
+    """The x-acceleration of Monaghan's viscosity (the -sum m_j Pi_ij grad W part of
+    Eq. 26's DVDT sums) at the centre particle of a lattice (dx = 1, rho = 1, h = 1.2)
+    in the shear flow v_x = cos(k z) (z the last axis), from the pair sweep of `dim`,
+    and the same sum in numpy over the centre's neighbours."""
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
+    from psph.kernels.interactions import pair_sums, pair_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    h, m = 1.2, 9
+    g = np.arange(m) - m // 2 + 0.0
+    x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
+    n = len(x)
+    centre = int(np.argmin(np.linalg.norm(x, axis=1)))
+    v = np.zeros((n, dim))
+    v[:, 0] = np.cos(k * x[:, -1])
+    z = np.zeros
+    nv = 3 if dim == 2 else 6
+    fields = PairFields(x, v, v.copy(), z((n, 4 if dim == 2 else 6)), z(n), z(n),
+                        np.full(n, 0.4), np.ones(n), np.ones(n), np.ones(n), z((n, dim)),
+                        z((n, nv)))
+    lay = sum_layout(dim)
+    sums = z((n, lay.NSUMS))
+    sweep = pair_sums if dim == 2 else pair_sums_3d
+    sweep(n, n, n, fields, sorted_cells(*cell_lists(x, h), x),
+          PairParams(h, av_alpha=alpha, c_sound=c, coupled=False).typed(), sums,
+          PairRecord(z((0, 2), np.int64), z((0, dim))))
+    xab = x[centre] - x
+    r = np.linalg.norm(xab, axis=1)
+    near = (r > 0) & (r < 2 * h)
+    vdotr = (v[centre, 0] - v[near, 0]) * xab[near, 0]
+    mu = np.where(vdotr < 0, h * vdotr / (r[near] ** 2 + 0.01 * h * h), 0.0)
+    dw = np.array([dw_cubic_dim(ri, h, dim) for ri in r[near]])
+    numpy_sum = np.sum(alpha * c * mu * dw * xab[near, 0] / r[near])
+    return sums[centre, lay.DVDT], numpy_sum
+
+
+def test_artificial_viscosity_is_weaker_in_3d_at_one_alpha():
+    """Monaghan's viscosity acts as nu = alpha h c / (2 (d + 2)): at one alpha a 3D
+    lattice whose every y-layer carries a 2D shear flow (the slab between mirror walls,
+    `collapse_saturated_3d`) is 0.86 as viscous as the 2D lattice at h = 1.2 dx (4 / 5
+    for a large h / dx; `bench/diagnostics/av_viscosity_dims.py`). The sweeps' sums are
+    the numpy sums of the term in both dimensions."""
+    alpha, c, k = 1.0, 3.0, 0.2
+    a2, ref2 = _viscous_acceleration(2, alpha, c, k)
+    a3, ref3 = _viscous_acceleration(3, alpha, c, k)
+    assert a2 == pytest.approx(ref2, rel=1e-12) and a3 == pytest.approx(ref3, rel=1e-12)
+    assert a2 < 0.0 and a3 < 0.0  # the flow at the centre (v_x = 1, a maximum) is slowed
+    assert a3 / a2 == pytest.approx(0.860, abs=0.002)

@@ -7,6 +7,14 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
     python bench/verification/collapse_saturated_3d.py --reuse     # tables finished runs
     python bench/verification/collapse_saturated_3d.py --psi -5 --dx 0.08 --end 0.9
                                         # both at another dx (the slab stays 4 dx thick)
+    python bench/verification/collapse_saturated_3d.py --psi -5 --nu-2d
+                                        # the slab at the 2D scene's viscosity
+
+`--nu-2d` runs the slab at the artificial viscosity of the 2D scene rather than at its
+alpha: Monaghan's term acts as nu = alpha h c / (2 (d + 2)), so at the same alpha a 3D
+lattice is 4 / 5 as viscous as a 2D one (0.86 on the lattice at h = 1.2 dx,
+`bench/diagnostics/av_viscosity_dims.py`), and the slab's alpha is the 2D scene's times
+5 / 4 (its runs and outputs are tagged `_nu2d`; the 2D run is the untagged one).
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
@@ -37,6 +45,7 @@ OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "collapse_saturated_3d"
 PSIS = ("-5", "0", "2.5")
 BAR = 0.05
+NU_2D = (3 + 2) / (2 + 2)  # alpha(3D) / alpha(2D) for one nu = alpha h c / (2 (d + 2))
 
 
 def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
@@ -49,6 +58,13 @@ def plasticity_settings(psi: str) -> list[str]:
     path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
     plasticity = tomllib.loads(path.read_text())["material"]["plasticity"]
     return [f"material.plasticity.{k}={v}" for k, v in plasticity.items()]
+
+
+def nu_2d_settings(psi: str) -> list[str]:
+    """The slab's artificial viscosity set to the 2D scene's nu (`--nu-2d`)."""
+    path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
+    alpha = tomllib.loads(path.read_text())["stabilisation"]["av_alpha"]
+    return [f"stabilisation.av_alpha={alpha * NU_2D:g}"]
 
 
 def numbers(s: dict) -> dict:
@@ -92,6 +108,8 @@ def main() -> None:
     ap.add_argument("--reuse", action="store_true", help="keep finished runs")
     ap.add_argument("--dx", type=float, help="particle spacing of both runs (scene: 0.04 m)")
     ap.add_argument("--end", type=float, help="end time of both runs (scene: 1.2 s)")
+    ap.add_argument("--nu-2d", action="store_true",
+                    help="the slab at the 2D scene's viscosity (alpha x 5/4)")
     args = ap.parse_args()
     common, tag = [], ""
     if args.dx is not None:
@@ -104,12 +122,14 @@ def main() -> None:
     if args.end is not None:
         common.append(f"time.end={args.end}")
         tag += f"_end{args.end:g}"
+    tag3 = tag + ("_nu2d" if args.nu_2d else "")
     rows = {}
     for psi in args.psi:
         s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
                  args.reuse)
-        s3 = run(RUNS / f"psi{psi}{tag}_3d", "collapse_saturated_3d", args.np,
-                 plasticity_settings(psi) + common + slab, args.reuse)
+        nu = nu_2d_settings(psi) if args.nu_2d else []
+        s3 = run(RUNS / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
+                 plasticity_settings(psi) + common + slab + nu, args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
         rows[psi] = {"2d": r2, "3d": r3,
                      "runout_rel": r3["runout_m"] / r2["runout_m"] - 1.0,
@@ -124,11 +144,11 @@ def main() -> None:
               f"{r['3d']['abs_excess_p99_max_Pa'] / 1e3:7.2f} "
               f"{100 * r['abs_excess_p99_rel']:+6.1f}% {'yes' if ok else 'NO':>10s}")
     OUT.mkdir(parents=True, exist_ok=True)
-    name = f"collapse_saturated_3d{tag}"
+    name = f"collapse_saturated_3d{tag3}"
     (OUT / f"{name}.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
-         "end": args.end, "rows": rows}, indent=1) + "\n")
-    plot(rows, OUT / f"{name}.png", tag)
+         "end": args.end, "nu_2d": args.nu_2d, "rows": rows}, indent=1) + "\n")
+    plot(rows, OUT / f"{name}.png", tag3)
     print(f"wrote {OUT / name}.json and .png")
 
 
