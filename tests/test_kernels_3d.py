@@ -729,18 +729,18 @@ def _viscous_acceleration(dim, alpha, c, k):
     from psph.kernels.interactions import pair_sums, pair_sums_3d
     from psph.kernels.sum_columns import sum_layout
 
-    h, m = 1.2, 9
-    g = np.arange(m) - m // 2 + 0.0
+    h, side = 1.2, 9
+    g = np.arange(side) - side // 2 + 0.0
     x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
     n = len(x)
     centre = int(np.argmin(np.linalg.norm(x, axis=1)))
     v = np.zeros((n, dim))
     v[:, 0] = np.cos(k * x[:, -1])
     z = np.zeros
-    nv = 3 if dim == 2 else 6
-    fields = PairFields(x, v, v.copy(), z((n, 4 if dim == 2 else 6)), z(n), z(n),
-                        np.full(n, 0.4), np.ones(n), np.ones(n), np.ones(n), z((n, dim)),
-                        z((n, nv)))
+    n_stress = 4 if dim == 2 else 6
+    n_astress = 3 if dim == 2 else 6  # the artificial stress's columns (off here)
+    fields = PairFields(x, v, v.copy(), z((n, n_stress)), z(n), z(n), np.full(n, 0.4),
+                        np.ones(n), np.ones(n), np.ones(n), z((n, dim)), z((n, n_astress)))
     lay = sum_layout(dim)
     sums = z((n, lay.NSUMS))
     sweep = pair_sums if dim == 2 else pair_sums_3d

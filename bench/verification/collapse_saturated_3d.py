@@ -12,9 +12,12 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
 
 `--nu-2d` runs the slab at the artificial viscosity of the 2D scene rather than at its
 alpha: Monaghan's term acts as nu = alpha h c / (2 (d + 2)), so at the same alpha a 3D
-lattice is 4 / 5 as viscous as a 2D one (0.86 on the lattice at h = 1.2 dx,
-`bench/diagnostics/av_viscosity_dims.py`), and the slab's alpha is the 2D scene's times
-5 / 4 (its runs and outputs are tagged `_nu2d`; the 2D run is the untagged one).
+lattice is about 4 / 5 as viscous as a 2D one (at h = 1.2 dx 0.86 for a shear wave and
+0.81 for a longitudinal one, `bench/diagnostics/av_viscosity_dims.py`). The slab's alpha
+is then the 2D scene's times 5 / 4, the continuum's ratio. The slab's run directory and
+the JSON and PNG get `_nu2d` after the other tags; the 2D run is the untagged one, so
+with `--reuse` it is shared. Several psi in one command share one JSON and PNG; a
+later command with the same tags overwrites them.
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
@@ -45,7 +48,7 @@ OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "collapse_saturated_3d"
 PSIS = ("-5", "0", "2.5")
 BAR = 0.05
-NU_2D = (3 + 2) / (2 + 2)  # alpha(3D) / alpha(2D) for one nu = alpha h c / (2 (d + 2))
+ALPHA_3D_OVER_2D = (3 + 2) / (2 + 2)  # one nu = alpha h c / (2 (d + 2)) in both
 
 
 def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
@@ -64,7 +67,7 @@ def nu_2d_settings(psi: str) -> list[str]:
     """The slab's artificial viscosity set to the 2D scene's nu (`--nu-2d`)."""
     path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
     alpha = tomllib.loads(path.read_text())["stabilisation"]["av_alpha"]
-    return [f"stabilisation.av_alpha={alpha * NU_2D:g}"]
+    return [f"stabilisation.av_alpha={alpha * ALPHA_3D_OVER_2D:g}"]
 
 
 def numbers(s: dict) -> dict:
