@@ -74,6 +74,63 @@ def test_images_and_the_plain_laplacian_agree_away_from_the_plane():
                           _laplacian(x, p, 0.0 * planes)[far])
 
 
+def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
+    """`image_sums` and `image_weights` test a pair's row a against the plane's reach once
+    for a run of pairs with the same a (the sweep's order). In the sweep's order and
+    shuffled, a far row first or a near one, so that the runs are broken and near and
+    far rows alternate, they give what the pairs give one call each (where no run can
+    carry a stale test): the same sums to the reordered additions' rounding and the same
+    weights pair for pair."""
+    x = _column(8, 8)
+    n = len(x)
+    vol = np.full(n, DX * DX)
+    pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
+    q = np.random.default_rng(4).normal(size=n)
+    base, n_pairs = sums_for(x, H, vol, p=q, pairs=pairs)
+    pr, g = pairs[0][:n_pairs], pairs[1][:n_pairs]
+    ones = np.ones(n)
+    planes = np.array([[1.0, TOP, -1.0, 1.0]])
+    w = np.zeros(n_pairs)
+    pair_weights(n_pairs, pr, g, x, ones, ones, 1.0, 0.0, w)
+
+    def images(m, prs, wts):
+        s = np.zeros_like(base)
+        image_sums(n, m, prs, x, q, q.copy(), vol, ones, planes, H, 0.0, 0.0, 0.0, s)
+        wd, wo, storage = np.zeros(m), np.zeros(m), np.zeros(n)
+        image_weights(n, m, prs, x, ones, ones, vol, planes, H, 1.0, 0.0, wts, wd, wo,
+                      storage)
+        return s, wd, wo, storage
+
+    own, _, _, own_storage = images(0, pr[:0], w[:0])
+    ref_s = own.copy()
+    ref_wd, ref_wo = np.zeros(n_pairs), np.zeros(n_pairs)
+    for k in range(n_pairs):  # one pair a call
+        s, wd, wo, _ = images(1, pr[k:k + 1], w[k:k + 1])
+        ref_s += s - own
+        ref_wd[k], ref_wo[k] = wd[0], wo[0]
+    assert np.count_nonzero(ref_wd != ref_wo) > 0  # some pairs have an image
+    near = TOP - x[pr[:, 0], 1] < 2 * H
+    shuffle = np.random.default_rng(5).permutation(n_pairs)
+    far_first, near_first = shuffle.copy(), shuffle.copy()
+    k_far = int(np.flatnonzero(~near[shuffle])[0])
+    k_near = int(np.flatnonzero(near[shuffle])[0])
+    far_first[[0, k_far]] = far_first[[k_far, 0]]
+    near_first[[0, k_near]] = near_first[[k_near, 0]]
+    for order in (np.arange(n_pairs), far_first, near_first):
+        s, wd, wo, storage = images(n_pairs, pr[order], w[order])
+        back = np.argsort(order)
+        assert np.allclose(s, ref_s, rtol=1e-12, atol=1e-12 * np.abs(ref_s).max())
+        assert np.array_equal(wd[back], ref_wd) and np.array_equal(wo[back], ref_wo)
+        assert np.array_equal(storage, own_storage)
+    # the reach itself: an image just inside the support, its row a 1.95 h from the plane
+    two = np.array([[0.5, TOP - 1.95 * H], [0.5, TOP - 0.02 * H]])
+    for pair in ([[0, 1]], [[1, 0]]):
+        wd, wo = np.zeros(1), np.zeros(1)
+        image_weights(2, 1, np.array(pair), two, np.ones(2), np.ones(2), np.ones(2), planes,
+                      H, 1.0, 0.0, np.zeros(1), wd, wo, np.zeros(2))
+        assert wd[0] > 0.0 and wo[0] == -wd[0]
+
+
 def test_operator_with_images_is_symmetric_positive_definite_and_matches_the_sums():
     """The projection's operator with the images (`image_weights`): symmetric, positive
     definite without storage (the plane pins it), and -S q / V equals the image Laplacian
