@@ -10,7 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from psph.kernels.neighbours import cell_lists, neighbour_pairs
+from psph.kernels.neighbours import (
+    cell_lists,
+    neighbour_pairs,
+    pair_cell_lists,
+    pair_cell_span,
+)
 from psph.kernels.spline import dw_cubic, dw_cubic_dim, w_cubic, w_cubic_dim
 
 
@@ -22,11 +27,36 @@ def lattice_3d(n: int, dx: float, jitter: float, seed: int = 1) -> np.ndarray:
     return x + rng.uniform(-jitter, jitter, x.shape) * dx
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_pair_grid_finds_the_pairs_of_the_grid_of_side_2h(dim):
+    """The pair sweep's cells of side h in 3D (`neighbours.pair_cell_span`, a 5-wide half
+    stencil of 13 runs) find each pair closer than 2h once, the same pairs as the cells of
+    side 2h (a 3-wide stencil of 5 runs), in a cloud that fills a few cells, edges and
+    corners included; in 2D the pair grid is the grid of side 2h."""
+    rng = np.random.default_rng(11)
+    h = 0.06
+    x = rng.uniform(0.0, 0.5, (1500, dim)) if dim == 3 else rng.uniform(0.0, 0.5, (400, 2))
+    found = []
+    for lists, span in ((cell_lists(x, h), 1), (pair_cell_lists(x, h), pair_cell_span(dim))):
+        pairs = np.zeros((200 * len(x), 2), np.int64)
+        m = neighbour_pairs(len(x), x, h, *lists, pairs, span)
+        assert m > 0
+        ab = np.sort(pairs[:m], axis=1)
+        found.append(ab[np.lexsort((ab[:, 1], ab[:, 0]))])
+        assert len({tuple(p) for p in ab}) == m  # each pair once
+    assert np.array_equal(found[0], found[1])
+    d = x[:, None, :] - x[None, :, :]
+    assert found[0].shape[0] == np.count_nonzero(np.triu(np.sum(d * d, axis=2) < 4 * h * h, 1))
+    assert pair_cell_span(dim) == (2 if dim == 3 else 1)
+
+
 def pairs_of(x: np.ndarray, h: float) -> np.ndarray:
-    """The pairs closer than 2h by the cell lists' half stencil (`neighbour_pairs`)."""
-    cell_start, order, ncell = cell_lists(x, h)
+    """The pairs closer than 2h by the half stencil of the pair sweep's cell lists
+    (`neighbour_pairs` on `pair_cell_lists`)."""
+    cell_start, order, ncell = pair_cell_lists(x, h)
     pairs = np.zeros((256 * len(x), 2), np.int64)
-    m = neighbour_pairs(len(x), x, h, cell_start, order, ncell, pairs)
+    m = neighbour_pairs(len(x), x, h, cell_start, order, ncell, pairs,
+                        pair_cell_span(x.shape[1]))
     assert m >= 0
     return pairs[:m]
 
@@ -214,7 +244,7 @@ def test_pair_sweep_in_3d_matches_numpy_sums():
     v = rng.normal(size=(n, 3))
     fields = PairFields(x, v, v.copy(), stress, p, p.copy(), rng.uniform(0.3, 0.5, n), vol,
                         rho, perm, np.zeros((n, 3)), np.zeros((n, 6)))
-    cell_start, order, ncell = cell_lists(x, h)
+    cell_start, order, ncell = pair_cell_lists(x, h)
     par = PairParams(h, av_alpha=1.0, av_beta=0.5, c_sound=20.0, record=True).typed()
     rec = PairRecord(np.zeros((64 * n, 2), np.int64), np.zeros((64 * n, 3)))
     sums = np.zeros((n, lay.NSUMS))
@@ -327,7 +357,7 @@ def test_a_3d_step_of_a_uniformly_strained_block():
                         np.full(n, dx ** 3), np.full(n, 2000.0), z(n), z((n, 3)), z((n, 6)))
     sums = z((n, sum_layout(3).NSUMS))
     rec = PairRecord(z((64 * n, 2), np.int64), z((64 * n, 3)))
-    pair_sums_3d(n, n, n, fields, sorted_cells(*cell_lists(x, h), x), PairParams(h).typed(),
+    pair_sums_3d(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x), PairParams(h).typed(),
                  sums, rec)
     lam, shear, dt = 5.0e6, 3.0e6, 1e-5
     mat = z((1, MAT_COLUMNS))
@@ -374,7 +404,7 @@ def test_projection_kernels_in_3d():
                         np.full(n, dx ** 3), rho, perm, z((n, 3)), z((n, 6)))
     sums = z((n, sum_layout(3).NSUMS))
     rec = PairRecord(z((64 * n, 2), np.int64), z((64 * n, 3)))
-    m_pairs = pair_sums_3d(n, n, n, fields, sorted_cells(*cell_lists(x, h), x),
+    m_pairs = pair_sums_3d(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x),
                            PairParams(h, record=True).typed(), sums, rec)
     pairs, g = rec.pairs[:m_pairs], rec.pair_g[:m_pairs]
     w = z(m_pairs)
@@ -464,7 +494,7 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
         sums = z((count, lay.NSUMS))
         rec = PairRecord(z((64 * count, 2), np.int64), z((64 * count, 3)))
         got = pair_sums_3d(count, n, count, fields,
-                           sorted_cells(*cell_lists(pos, h), pos, n_owned=n), par, sums, rec)
+                           sorted_cells(*pair_cell_lists(pos, h), pos, n_owned=n), par, sums, rec)
         return sums, rec, got
 
     sums, rec, m_pairs = sweep(x, p, perm)
@@ -510,7 +540,7 @@ def test_the_sweep_skips_runs_without_owned_rows_to_the_same_bits(dim):
     for counted in (owned, None):
         sums = z((n, sum_layout(dim).NSUMS))
         rec = PairRecord(z((64 * n, 2), np.int64), z((64 * n, dim)))
-        m = sweep(n, owned, n, fields, sorted_cells(*cell_lists(x, h), x, n_owned=counted),
+        m = sweep(n, owned, n, fields, sorted_cells(*pair_cell_lists(x, h), x, n_owned=counted),
                   par, sums, rec)
         out.append((sums[:owned], rec.pairs[:m], rec.pair_g[:m]))
     assert len(out[0][1]) > 0
@@ -638,7 +668,7 @@ def _sweep_3d(x, h, v, vol):
                         np.ones(n), np.ones(n), z((n, 3)), z((n, 6)))
     rec = PairRecord(z((64 * n, 2), np.int64), z((64 * n, 3)))
     sums = z((n, sum_layout(3).NSUMS))
-    m = pair_sums_3d(n, n, n, fields, sorted_cells(*cell_lists(x, h), x),
+    m = pair_sums_3d(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x),
                      PairParams(h, coupled=False, record=True).typed(), sums, rec)
     return sums, rec.pairs[:m], rec.pair_g[:m]
 
@@ -744,7 +774,7 @@ def _viscous_acceleration(dim, alpha, c, k):
     lay = sum_layout(dim)
     sums = z((n, lay.NSUMS))
     sweep = pair_sums if dim == 2 else pair_sums_3d
-    sweep(n, n, n, fields, sorted_cells(*cell_lists(x, h), x),
+    sweep(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x),
           PairParams(h, av_alpha=alpha, c_sound=c, coupled=False).typed(), sums,
           PairRecord(z((0, 2), np.int64), z((0, dim))))
     xab = x[centre] - x

@@ -12,8 +12,9 @@ floor of the built-in scene:
 
 The variants of the floor's weight continuation (`kernels/boundary_3d.py`) apply
 `surface_floor_no_weight.patch` or `surface_floor_compression_only.patch` to a worktree
-(`git worktree add /tmp/x HEAD && git -C /tmp/x apply $PWD/bench/diagnostics/<patch>`)
-and run the same scene there with `PYTHONPATH=/tmp/x`.
+(`git worktree add /tmp/x b844fca && git -C /tmp/x apply $PWD/bench/diagnostics/<patch>`:
+the commit they were made on; they do not apply to later ones) and run the same scene
+there with `PYTHONPATH=/tmp/x`.
 """
 
 import json

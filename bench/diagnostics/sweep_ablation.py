@@ -15,6 +15,10 @@ results are wrong by construction; only the time counts. `sweep_a_side_registers
 (applied the same way) is a variant with the same sums: a's shares of its forward pairs
 held in tuples and written once after them. Compare in the same minute (this
 VM drifts): pause other runs (kill -STOP) while measuring.
+The tables of 2026-12-05 in docs/performance.md were measured on the sweep's cells of
+side 2h: a worktree of 28bc41c, the last commit before the 3D pair grid of side h
+(`neighbours.pair_cell_span`), reproduces them, and `sweep_a_side_registers.patch`
+applies only there.
 """
 
 import sys

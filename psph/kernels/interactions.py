@@ -48,7 +48,7 @@ import math
 import numba as nb
 
 from psph.kernels.dims import add_moment, add_outer, mirror_moment, pick, velocity_differences
-from psph.kernels.neighbours import forward_slots, half_stencil_rows, next_cell
+from psph.kernels.neighbours import forward_slots, half_stencil_rows, next_cell, pair_cell_span
 from psph.kernels.spline import dw_cubic_dim, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
 
@@ -73,7 +73,8 @@ def make_pair_sums(dim: int):
     ca, cap_, capsi, cga, cdv, cgs = (lay.SUM_A, lay.SUM_AP, lay.SUM_APSI, lay.GA,
                                       lay.DVDT, lay.GS)
     nsums = lay.NSUMS
-    n_rows = half_stencil_rows(dim)
+    span = pair_cell_span(dim)  # the grid of `cells` has cells of side 2h / span
+    n_rows = half_stencil_rows(dim, span)
     as_xy = 2 if dim == 2 else 3  # the artificial stress's xy column
 
     @nb.njit(cache=True, error_model="numpy", fastmath=fastmath_of(dim))
@@ -83,10 +84,12 @@ def make_pair_sums(dim: int):
 
         f: `bundles.PairFields` of rows 0..n_total-1; rows n_real.. are wall ghosts, whose
         `v_slip` (free-slip mirror) enters GN and GS (see the module docstring).
-        cells: `bundles.Cells`. par: `bundles.PairParams`: coupled computes the
-        pressure-related sums (GP, GN, Q, SUM_A, SUM_AP, SUM_APSI); acc_term the div(k dv/dt)
-        sums GA; rho_l_b = rho_l * body force (N/m^3); the artificial stress f.astress (xx,
-        yy, xy; 3D: xx, yy, zz, xy, yz, zx) enters the pair stress with weight
+        cells: `bundles.Cells` of the pair sweep's grid (cells of side 2h /
+        `neighbours.pair_cell_span(dim)`: side h in 3D).
+        par: `bundles.PairParams`: coupled computes the pressure-related sums (GP, GN, Q,
+        SUM_A, SUM_AP, SUM_APSI); acc_term the div(k dv/dt) sums GA; rho_l_b = rho_l * body
+        force (N/m^3); the artificial stress f.astress (xx, yy, xy; 3D: xx, yy, zz, xy, yz,
+        zx) enters the pair stress with weight
         (W(r) / w_dx)^as_n (C_ij of Eq. 26), off
         at as_n = 0; p_weight = 1 puts the pore pressure in the pair's total stress (Eq. 26
         as written), 0 leaves it out for `update.pore_pressure_force` to add it as a
@@ -149,7 +152,7 @@ def make_pair_sums(dim: int):
                     kaa2 = perm_a * acc[a, 2] if dim == 3 else 0.0
                 for row in range(n_rows):
                     s0, s1 = forward_slots(row, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start,
-                                           dim)
+                                           dim, span)
                     # a halo or ghost row pairs only with owned ones: skip runs without
                     if not own_a and owned_before[s1] == owned_before[s0]:
                         continue

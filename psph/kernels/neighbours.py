@@ -1,10 +1,11 @@
 """Cell-linked lists with particles sorted by cell, and id order inside a cell, in 2D and 3D.
 
-Cells are squares (cubes) of side >= 2h on a grid anchored at a global origin, so a
-cell's integer coordinates are the same on every rank. Cells are numbered row-major
-(z, then y, then x): the local numbering is the restriction of the global one, and with
-particles in key order inside a cell every particle sees its neighbours in the same order
-on any number of ranks. That is what makes 1-rank and N-rank runs bitwise identical.
+Cells are squares (cubes) of side >= 2h / span on a grid anchored at a global origin (span 1
+for the cell-list kernels; the pair sweep's grid, `pair_cell_span`, has cells of side h in
+3D), so a cell's integer coordinates are the same on every rank. Cells are numbered
+row-major (z, then y, then x): the local numbering is the restriction of the global one, and
+with particles in key order inside a cell every particle sees its neighbours in the same
+order on any number of ranks. That is what makes 1-rank and N-rank runs bitwise identical.
 The dimension is that of the positions (x.shape[1]); a 2D grid is a 3D grid one cell
 thick, so 2D keeps its cell numbers and its stencil order.
 """
@@ -61,29 +62,42 @@ def next_cell(cx, cy, cz, ncx, ncy):
     return cx, cy, cz
 
 
-@nb.njit(cache=True, inline="always")
-def half_stencil_rows(dim: int) -> int:
-    """Slot ranges r of `forward_slots` to visit: 2 in 2D, 5 in 3D."""
-    return 2 if dim == 2 else 5
+def pair_cell_span(dim: int) -> int:
+    """Cells of the pair sweep's grid across the 2h support: its cells have side 2h / span.
+    2D: 1 (side 2h). 3D: 2 (side h): on a lattice at h = 1.2 dx a particle's half
+    stencil then visits 93 candidates instead of 157 for the same 26 pairs
+    (`bench/diagnostics/pair_grid_candidates.py`), and the 3D sweep of the throughput
+    bench's block took 81 instead of 95 ms (issue 37). The other cell-list kernels
+    (Shepard, the boundary particles, non-local softening) keep cells of side 2h."""
+    return 1 if dim == 2 else 2
 
 
 @nb.njit(cache=True, inline="always")
-def forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim):
+def half_stencil_rows(dim: int, span: int = 1) -> int:
+    """Slot ranges r of `forward_slots` to visit: 1 + span in 2D, 1 + span + span (2 span
+    + 1) in 3D (2 and 5 at span 1, 13 in 3D at span 2)."""
+    return 1 + span if dim == 2 else 1 + span + span * (2 * span + 1)
+
+
+@nb.njit(cache=True, inline="always")
+def forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim, span=1):
     """The r-th run of sorted slots (s0, s1) of the half stencil of slot sa in cell
-    c = (cx, cy, cz), or (0, 0) outside the grid. Cells are numbered x fastest, so the
-    half stencil's cells that share a row are consecutive, and so are their slots:
-    r = 0 is the rest of cell c and cell (+1, 0, 0); r = 1 the row (-1..+1, +1, 0);
-    in 3D r = 2-4 the rows (-1..+1, -1..+1, +1). The slots come in the order of
-    `half_stencil_3d` (k = 0..13), so a loop over them visits the same pairs in the
-    same order with one bounds check per row instead of one per cell."""
-    xlo = cx - 1 if cx > 0 else 0
-    xhi = cx + 1 if cx < ncx - 1 else ncx - 1
+    c = (cx, cy, cz), or (0, 0) outside the grid, on a grid of cells of side 2h / span
+    (`pair_cell_span`). Cells are numbered x fastest, so the half stencil's cells that
+    share a row are consecutive, and so are their slots: r = 0 is the rest of cell c and
+    cells (+1..+span, 0, 0); r = 1..span the rows (-span..+span, r, 0); in 3D the next
+    ones the rows (-span..+span, -span..+span, +1..+span), y fastest. At span 1 the slots
+    come in the order of `half_stencil_3d` (k = 0..13), so a loop over them visits the
+    same pairs in the same order with one bounds check per row instead of one per cell."""
+    xlo = cx - span if cx >= span else 0
+    xhi = cx + span if cx < ncx - span else ncx - 1
     if r == 0:
         return sa + 1, cell_start[c + 1 + xhi - cx]
-    if r == 1 or dim == 2:
-        ny, nz = cy + 1, cz
+    if r <= span or dim == 2:
+        ny, nz = cy + r, cz
     else:
-        ny, nz = cy + r - 3, cz + 1
+        k = r - span - 1
+        ny, nz = cy + k % (2 * span + 1) - span, cz + 1 + k // (2 * span + 1)
     if ny < 0 or ny >= ncy or nz >= ncz:
         return 0, 0
     row = (nz * ncy + ny) * ncx
@@ -226,62 +240,68 @@ def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
 
 
 @nb.njit(cache=True)
-def neighbour_pairs(n, x, h, cell_start, order, ncell, pairs):
+def neighbour_pairs(n, x, h, cell_start, order, ncell, pairs, span=1):
     """The pairs (a, b) of particles 0..n-1 closer than 2h, each once, in the half-stencil
-    order of the pair sweeps (2D or 3D, by x.shape[1]) into pairs (m, 2) int64; returns
-    their number, or -1 if m rows are not enough."""
+    order of the pair sweeps (2D or 3D, by x.shape[1]) on cells of side 2h / span (the
+    sweep's: `pair_cell_span`) into pairs (m, 2) int64; returns their number, or -1 if m
+    rows are not enough."""
     dim = x.shape[1]
     ncx = ncell[0]
     ncy = ncell[1]
     ncz = ncell[2] if dim == 3 else 1
-    n_stencil = half_stencil_size(dim)
+    n_rows = half_stencil_rows(dim, span)
     reach2 = 4.0 * h * h
     m = 0
-    for cz in range(ncz):
-        for cy in range(ncy):
-            for cx in range(ncx):
-                c = (cz * ncy + cy) * ncx + cx
-                for sa in range(cell_start[c], cell_start[c + 1]):
-                    a = order[sa]
-                    if a >= n:
+    cx, cy, cz = -1, 0, 0
+    for c in range(ncx * ncy * ncz):
+        cx, cy, cz = next_cell(cx, cy, cz, ncx, ncy)
+        for sa in range(cell_start[c], cell_start[c + 1]):
+            a = order[sa]
+            if a >= n:
+                continue
+            for row in range(n_rows):
+                s0, s1 = forward_slots(row, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim,
+                                       span)
+                for s in range(s0, s1):
+                    b = order[s]
+                    if b >= n:
                         continue
-                    for k in range(n_stencil):
-                        nc, sb = half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz,
-                                                 cell_start)
-                        if nc < 0:
-                            continue
-                        for s in range(sb, cell_start[nc + 1]):
-                            b = order[s]
-                            if b >= n:
-                                continue
-                            r2 = 0.0
-                            for d in range(dim):
-                                e = x[b, d] - x[a, d]
-                                r2 += e * e
-                            if r2 >= reach2:
-                                continue
-                            if m >= pairs.shape[0]:
-                                return -1
-                            pairs[m, 0] = a
-                            pairs[m, 1] = b
-                            m += 1
+                    r2 = 0.0
+                    for d in range(dim):
+                        e = x[b, d] - x[a, d]
+                        r2 += e * e
+                    if r2 >= reach2:
+                        continue
+                    if m >= pairs.shape[0]:
+                        return -1
+                    pairs[m, 0] = a
+                    pairs[m, 1] = b
+                    m += 1
     return m
 
 
-def cell_lists(x: np.ndarray, h: float,
-               key: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(cell_start, order, ncell) of a whole particle set (2D or 3D) in one go, cells of side 2h
-    (the pair sweeps' layout); for verification drivers and tests, not the time loop,
-    which keeps its arrays. key: the sort key within a cell (default: the index)."""
-    return cell_lists_indexed(x, h, key)[1:]
+def cell_lists(x: np.ndarray, h: float, key: np.ndarray | None = None,
+               span: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(cell_start, order, ncell) of a whole particle set (2D or 3D) in one go, cells of side
+    2h / span (span 1: the cell-list kernels' layout; `pair_cell_lists` for the pair
+    sweep's); for verification drivers and tests, not the time loop, which keeps its
+    arrays. key: the sort key within a cell (default: the index)."""
+    return cell_lists_indexed(x, h, key, span)[1:]
 
 
-def cell_lists_indexed(x: np.ndarray, h: float, key: np.ndarray | None = None
+def pair_cell_lists(x: np.ndarray, h: float, key: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`cell_lists` in the pair sweep's layout (`pair_cell_span`: cells of side h in 3D)."""
+    return cell_lists(x, h, key, pair_cell_span(x.shape[1]))
+
+
+def cell_lists_indexed(x: np.ndarray, h: float, key: np.ndarray | None = None,
+                       span: int = 1
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(cell_of, cell_start, order, ncell): `cell_lists` with each particle's cell."""
     n, dim = x.shape
     key = np.arange(n, dtype=float) if key is None else key
-    cs = 2 * h
+    cs = 2 * h / span
     origin = x.min(axis=0) - 4 * cs
     lo = np.zeros(dim, np.int64)
     ncell = np.zeros(dim, np.int64)

@@ -19,6 +19,7 @@ from psph.errors import NumericalError
 from psph.geometry.lattice import extent, seed
 from psph.geometry.shapes import removal_region
 from psph.kernels.laplacian import lattice_moment
+from psph.kernels.neighbours import pair_cell_span
 from psph.kernels.spline import w_cubic, w_cubic_dim
 from psph.kernels.sum_columns import sum_layout
 from psph.kernels.update import (
@@ -37,6 +38,7 @@ from psph.physics.material import (
 )
 from psph.physics.softening import nonlocal_softening
 from psph.solver.boundary import BoundaryParticles, halo_width, has_boundary_particles
+from psph.solver.cells import CellGrid
 from psph.solver.drainage import Drainage
 from psph.solver.kernel_set import kernels_for
 from psph.solver.pressure_solve import PressureSolve
@@ -128,6 +130,14 @@ class Simulation(Stages):
         self.fill = np.zeros(1024, np.int64)
         self.cell_of = np.zeros(self.store.cap, np.int64)
         self.order = np.zeros(self.store.cap, np.int64)
+        # the pair sweep's grid: cells of side h in 3D (`neighbours.pair_cell_span`), a grid
+        # of its own beside the one of side 2h, which the other cell-list kernels keep
+        # and which is binned only for them; in 2D the sweep takes the grid of side 2h
+        span_cells = pair_cell_span(dim)
+        self.pair_grid = CellGrid(self.origin, self.cell_size / span_cells,
+                                  np.ceil(span / self.cell_size).astype(np.int64) * span_cells
+                                  + 8 * span_cells, self.store.cap) \
+            if span_cells > 1 else None
         self.x_sorted = np.zeros((self.store.cap, dim))
         self.owned_before = np.zeros(self.store.cap + 1, np.int64)  # `count_owned`
         lay = self.layout = sum_layout(dim)
@@ -184,6 +194,14 @@ class Simulation(Stages):
         self.bad_particle = -1
         self.failure = None
         self.equilibrium = {}  # what `equilibrate` did
+        stab = scene.stabilisation
+        # the grid of side 2h: the sweep's in 2D; in 3D only for the kernels that take it
+        self.needs_cells = (self.pair_grid is None or self.softening is not None
+                            or self.wall_particles is not None
+                            or (stab.shepard_every > 0
+                                and (self.coupled or stab.shepard_stress)))
+        if not self.needs_cells:
+            self.cell_of = self.order = np.zeros(0, np.int64)
         self.stages = self._assemble()
 
     # ------------------------------------------------------------------ pipeline
@@ -240,9 +258,10 @@ class Simulation(Stages):
 
     def state_bytes(self) -> int:
         """Bytes of the running state on this rank: the particle store's arrays and the
-        simulation's own (scratch, neighbour lists, pair lists, bookkeeping)."""
+        simulation's own (scratch, cell lists, the pair grid's, pair lists, bookkeeping)."""
+        grid = vars(self.pair_grid).values() if self.pair_grid is not None else ()
         arrays = list(self.store.arrays.values()) + [
-            a for a in vars(self).values() if isinstance(a, np.ndarray)]
+            a for a in (*vars(self).values(), *grid) if isinstance(a, np.ndarray)]
         return int(sum(a.nbytes for a in arrays))
 
     # ------------------------------------------------------------------ stepping

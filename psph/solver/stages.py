@@ -115,11 +115,15 @@ class Stages:
     def _neighbours(self) -> None:
         st = self.store
         n = st.n_total
+        if self.sums.shape[0] < st.n_owned:  # every kernel writes and reads owned rows only
+            self.sums = np.zeros((st.n_owned + st.n_owned // 8 + 64, self.layout.NSUMS))
+        if self.pair_grid is not None:
+            self.pair_grid.bin(st.x, st.key, n)
+        if not self.needs_cells:
+            return
         if self.cell_of.shape[0] < st.cap:
             self.cell_of = np.zeros(st.cap, np.int64)
             self.order = np.zeros(st.cap, np.int64)
-        if self.sums.shape[0] < st.n_owned:  # every kernel writes and reads owned rows only
-            self.sums = np.zeros((st.n_owned + st.n_owned // 8 + 64, self.layout.NSUMS))
         grid_bounds(st.x, n, self.origin, self.cell_size, self.cell_max, self.grid_lo,
                     self.ncell)
         nc = int(np.prod(self.ncell))
@@ -190,15 +194,17 @@ class Stages:
             artificial_stress(st.n_total, st.stress, sb.artificial_stress, self.astress)
             as_n = sb.artificial_stress_n
         fields = fields_of(PairFields, st.arrays, v_slip=self.v_slip, astress=self.astress)
-        n_slots = int(self.cell_start[int(np.prod(self.ncell))])
+        grid = self.pair_grid
+        cell_start, order, ncell = ((self.cell_start, self.order, self.ncell) if grid is None
+                                    else (grid.cell_start, grid.order, grid.ncell))
+        n_slots = int(cell_start[int(np.prod(ncell))])
         if self.x_sorted.shape[0] < n_slots:
             self.x_sorted = np.zeros((st.cap, self.dim))
-        gather_sorted(st.x, self.order, n_slots, self.x_sorted)
+        gather_sorted(st.x, order, n_slots, self.x_sorted)
         if self.owned_before.shape[0] < n_slots + 1:
             self.owned_before = np.zeros(st.cap + 1, np.int64)
-        count_owned(self.order, n_slots, st.n_owned, self.owned_before)
-        cells = Cells(self.cell_start, self.order, self.ncell, self.x_sorted,
-                      self.owned_before)
+        count_owned(order, n_slots, st.n_owned, self.owned_before)
+        cells = Cells(cell_start, order, ncell, self.x_sorted, self.owned_before)
         par = PairParams(self.h, alpha, sb.av_alpha, sb.av_beta, self.av_sound_speed,
                          rl * self.body[0], rl * self.body[1], self.coupled, self.acc_term,
                          as_n, self.w_dx, self.p_weight, self.record_pairs,
