@@ -89,7 +89,9 @@ def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
     base, n_pairs = sums_for(x, H, vol, p=q, pairs=pairs)
     pr, g = pairs[0][:n_pairs], pairs[1][:n_pairs]
     ones = np.ones(n)
-    planes = np.array([[1.0, TOP, -1.0, 1.0]])
+    # the top and the left side (x = 0, soil at larger x): each plane's pass starts its
+    # runs afresh
+    planes = np.array([[1.0, TOP, -1.0, 1.0], [0.0, 0.0, 1.0, 1.0]])
     w = np.zeros(n_pairs)
     pair_weights(n_pairs, pr, g, x, ones, ones, 1.0, 0.0, w)
 
@@ -109,7 +111,7 @@ def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
         ref_s += s - own
         ref_wd[k], ref_wo[k] = wd[0], wo[0]
     assert np.count_nonzero(ref_wd != ref_wo) > 0  # some pairs have an image
-    near = TOP - x[pr[:, 0], 1] < 2 * H
+    near = (TOP - x[pr[:, 0], 1] < 2 * H) | (x[pr[:, 0], 0] < 2 * H)
     shuffle = np.random.default_rng(5).permutation(n_pairs)
     far_first, near_first = shuffle.copy(), shuffle.copy()
     k_far = int(np.flatnonzero(~near[shuffle])[0])
@@ -126,8 +128,8 @@ def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
     two = np.array([[0.5, TOP - 1.95 * H], [0.5, TOP - 0.02 * H]])
     for pair in ([[0, 1]], [[1, 0]]):
         wd, wo = np.zeros(1), np.zeros(1)
-        image_weights(2, 1, np.array(pair), two, np.ones(2), np.ones(2), np.ones(2), planes,
-                      H, 1.0, 0.0, np.zeros(1), wd, wo, np.zeros(2))
+        image_weights(2, 1, np.array(pair), two, np.ones(2), np.ones(2), np.ones(2),
+                      planes[:1], H, 1.0, 0.0, np.zeros(1), wd, wo, np.zeros(2))
         assert wd[0] > 0.0 and wo[0] == -wd[0]
 
 

@@ -27,6 +27,42 @@ def lattice_3d(n: int, dx: float, jitter: float, seed: int = 1) -> np.ndarray:
     return x + rng.uniform(-jitter, jitter, x.shape) * dx
 
 
+@pytest.mark.parametrize("dim, span", [(2, 1), (3, 1), (3, 2)])
+def test_forward_slots_visit_the_half_stencil_in_cell_order(dim, span):
+    """`neighbours.forward_slots` against the half stencil spelt out as cell offsets (the
+    cells after a cell in the row-major order among the (2 span + 1)^dim around it):
+    on grids one cell wide to seven, with 0-2 slots a cell, the runs of every slot
+    cover exactly the rest of its cell and then the slots of its forward cells inside
+    the grid, in the global cell order (span 1: the order of the sweeps before the pair
+    grid; span 2: the 3D pair sweep's cells of side h)."""
+    from psph.kernels.neighbours import forward_slots, half_stencil_rows
+
+    rng = np.random.default_rng(3)
+    rad = range(-span, span + 1)
+    offsets = sorted(((ox, oy, oz) for oz in (rad if dim == 3 else [0]) for oy in rad
+                      for ox in rad if (oz, oy, ox) > (0, 0, 0)),
+                     key=lambda o: (o[2], o[1], o[0]))
+    for shape in ((1, 1, 1), (3, 3, 3), (4, 5, 3), (6, 3, 4), (2, 7, 5)):
+        ncx, ncy, ncz = shape if dim == 3 else (shape[0], shape[1], 1)
+        counts = rng.integers(0, 3, ncx * ncy * ncz)
+        cell_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        for c in range(ncx * ncy * ncz):
+            cx, cy, cz = c % ncx, (c // ncx) % ncy, c // (ncx * ncy)
+            for sa in range(cell_start[c], cell_start[c + 1]):
+                want = list(range(sa + 1, cell_start[c + 1]))
+                for ox, oy, oz in offsets:
+                    nx, ny, nz = cx + ox, cy + oy, cz + oz
+                    if 0 <= nx < ncx and 0 <= ny < ncy and 0 <= nz < ncz:
+                        nc = (nz * ncy + ny) * ncx + nx
+                        want += range(cell_start[nc], cell_start[nc + 1])
+                got = []
+                for r in range(half_stencil_rows(dim, span)):
+                    s0, s1 = forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start,
+                                           dim, span)
+                    got += range(s0, s1)
+                assert got == want, (shape, c, sa)
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 def test_the_pair_grid_finds_the_pairs_of_the_grid_of_side_2h(dim):
     """The pair sweep's cells of side h in 3D (`neighbours.pair_cell_span`, a 5-wide half
@@ -98,7 +134,8 @@ def test_partition_of_unity_on_a_3d_lattice():
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_half_stencil_finds_every_pair_once(dim):
-    """The cell lists' half stencil (13 forward cells in 3D, 4 in 2D) against all pairs."""
+    """The pair sweep's half stencil (`pairs_of`: on cells of side h in 3D, 62 forward
+    cells in 13 runs; on cells of side 2h in 2D, 4 cells in 2 runs) against all pairs."""
     dx, h = 0.1, 0.12
     rng = np.random.default_rng(5)
     x = rng.uniform(0.0, 8 * dx, (700, dim))

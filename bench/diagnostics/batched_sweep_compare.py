@@ -1,6 +1,7 @@
 """A batched 3D pair sweep against the scalar one (issue 37, docs/performance.md): apply
 `batched_sweep_attempt.patch` (it adds psph/kernels/interactions_batched.py) to a worktree
-(`git worktree add /tmp/x HEAD && git -C /tmp/x apply $PWD/bench/diagnostics/
+of 28bc41c, the last commit whose 3D sweep ran on cells of side 2h, as the patch's kernel
+does (`git worktree add /tmp/x 28bc41c && git -C /tmp/x apply $PWD/bench/diagnostics/
 batched_sweep_attempt.patch`), then
 
     NUMBA_CACHE_DIR=/tmp/nbc PYTHONPATH=/tmp/x python bench/diagnostics/batched_sweep_compare.py

@@ -65,11 +65,11 @@ def _plane(planes, q):
 
 
 @nb.njit(cache=True, inline="always")
-def _reach(h):
-    """How far from a plane a row of an image pair can be: 2h, and a relative 1e-9 more, so
-    that a row this test turns away is out of `_image_of_pair`'s support for any
-    coordinates' rounding."""
-    return 2.0 * h * (1.0 + 1e-9)
+def _reach(h, pos):
+    """How far from the plane x[axis] = pos a row of an image pair can be: 2h, with a
+    margin above the rounding of `_image_of_pair`'s d_ax = 2 pos - x_a - x_b (a few ulps of
+    |pos|), so that a row this test turns away is out of that support too."""
+    return 2.0 * h * (1.0 + 1e-9) + 1e-14 * abs(pos)
 
 
 @nb.njit(cache=True, inline="always")
@@ -131,11 +131,11 @@ def make_image_sums(dim: int):
         psi = -rho_l b.x is taken at the image's position (it is a known field, not
         mirrored). 2D or 3D by x (sums of the 3D layout in 3D)."""
         support2 = 4.0 * h * h
-        reach = _reach(h)
         for q in range(planes.shape[0]):
             ax, pos, sg = _plane(planes, q)
             if ax < 0:
                 continue
+            reach = _reach(h, pos)
             last_a = -1
             a_near = False
             for k in range(n_pairs):
@@ -202,12 +202,12 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
     loaded top by other than the solve counted on, and at twice the solid cap a
     period-2 mode of p grew about 2.8x a step (issue 14; `tests/test_projection.py`)."""
     support2 = 4.0 * h * h
-    reach = _reach(h)
     for k in range(n_pairs):
         w_diag[k] = w[k]
         w_off[k] = w[k]
     for q in range(planes.shape[0]):
         ax, pos, sg = int(planes[q, 0]), planes[q, 1], planes[q, 2]
+        reach = _reach(h, pos)
         darcy = k_scale if planes[q, 3] != 0.0 else 0.0
         last_a = -1
         a_near = False

@@ -13,39 +13,10 @@ thick, so 2D keeps its cell numbers and its stencil order.
 import numba as nb
 import numpy as np
 
-# the half stencil: the cells after a cell in the row-major order (z, y, x) among its
-# 26 (3D) or 8 (2D) neighbours, as (ox, oy, oz): k = 1: (+1, 0, 0); k = 2-4: (-1..+1, +1, 0);
-# k = 5-13: (-1..+1, -1..+1, +1), x fastest. The 2D stencil is k = 0-4.
-
-
-@nb.njit(cache=True, inline="always")
-def half_stencil_size(dim: int) -> int:
-    """Entries k of `half_stencil_3d` to visit: the cell itself and its forward neighbours."""
-    return 5 if dim == 2 else 14
-
-
-@nb.njit(cache=True, inline="always")
-def half_stencil_3d(k, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start):
-    """Neighbour cell k (0-13; 0-4 in 2D, where cz = 0 and ncz = 1) of the half stencil
-    around cell c = (cx, cy, cz) and the first sorted slot to visit in it, or (-1, 0)
-    outside the grid. k = 0: the rest of cell c after slot sa; then the forward
-    neighbours (the comment above). Visiting these from every cell meets each pair once,
-    in an order fixed by the global cell numbering."""
-    if k == 0:
-        return c, sa + 1
-    if k == 1:
-        ox, oy, oz = 1, 0, 0
-    elif k < 5:
-        ox, oy, oz = k - 3, 1, 0
-    else:
-        ox, oy, oz = (k - 5) % 3 - 1, (k - 5) // 3 - 1, 1
-    nx = cx + ox
-    ny = cy + oy
-    nz = cz + oz
-    if nx < 0 or nx >= ncx or ny < 0 or ny >= ncy or nz >= ncz:
-        return -1, 0
-    nc = (nz * ncy + ny) * ncx + nx
-    return nc, cell_start[nc]
+# the half stencil of a cell on cells of side 2h / span: the cells after it in the
+# row-major order (z, y, x) among the (2 span + 1)^dim - 1 around it, as offsets (ox, oy, oz):
+# (+1..+span, 0, 0); (-span..+span, +1..+span, 0); in 3D (-span..+span, -span..+span,
+# +1..+span), x fastest. `forward_slots` visits them as runs of consecutive sorted slots.
 
 
 @nb.njit(cache=True, inline="always")
@@ -86,9 +57,10 @@ def forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim, span=1):
     (`pair_cell_span`). Cells are numbered x fastest, so the half stencil's cells that
     share a row are consecutive, and so are their slots: r = 0 is the rest of cell c and
     cells (+1..+span, 0, 0); r = 1..span the rows (-span..+span, r, 0); in 3D the next
-    ones the rows (-span..+span, -span..+span, +1..+span), y fastest. At span 1 the slots
-    come in the order of `half_stencil_3d` (k = 0..13), so a loop over them visits the
-    same pairs in the same order with one bounds check per row instead of one per cell."""
+    ones the rows (-span..+span, -span..+span, +1..+span), y fastest: the half stencil's
+    cells (the comment above) in the global cell order, with one bounds check per row
+    instead of one per cell (tests/test_kernels_3d.py checks the runs against the
+    offsets)."""
     xlo = cx - span if cx >= span else 0
     xhi = cx + span if cx < ncx - span else ncx - 1
     if r == 0:
@@ -102,29 +74,6 @@ def forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim, span=1):
         return 0, 0
     row = (nz * ncy + ny) * ncx
     return cell_start[row + xlo], cell_start[row + xhi + 1]
-
-
-@nb.njit(cache=True, inline="always")
-def half_stencil(k, c, sa, cx, cy, ncx, ncy, cell_start):
-    """`half_stencil_3d` of a 2D grid, spelt out (the 2D pair loops run it for every
-    particle): k = 0: the rest of cell c after slot sa; then (+1, 0), (-1, +1), (0, +1),
-    (+1, +1)."""
-    if k == 0:
-        return c, sa + 1
-    if k == 1:
-        ox, oy = 1, 0
-    elif k == 2:
-        ox, oy = -1, 1
-    elif k == 3:
-        ox, oy = 0, 1
-    else:
-        ox, oy = 1, 1
-    nx = cx + ox
-    ny = cy + oy
-    if nx < 0 or nx >= ncx or ny >= ncy:
-        return -1, 0
-    nc = ny * ncx + nx
-    return nc, cell_start[nc]
 
 
 @nb.njit(cache=True, inline="always")

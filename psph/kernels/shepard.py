@@ -7,8 +7,9 @@ it every m = 20-40 steps. Neighbours include halo rows and wall ghosts (which ca
 mirrored pressure), so a wall behaves as a symmetry plane. The effective stress can be
 regularised in the same step, with the same sum or with its first-order (MLS) form.
 All three filters share one pair sweep, `kernel_moments`, which visits the pairs in the
-order of the step's sweep (`neighbours.forward_slots`); the 2D kernels keep the
-operations, and so the bits, of the 2D code before 3D.
+half-stencil order of the cells of side 2h (`neighbours.forward_slots` at span 1: the
+step's sweep's order in 2D; the 3D sweep runs on cells of side h); the 2D kernels keep
+the operations, and so the bits, of the 2D code before 3D.
 """
 
 import math

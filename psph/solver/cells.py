@@ -1,6 +1,7 @@
 """A cell list of the particle store's rows with its own arrays: the pair sweep's grid of
-cells of side h in 3D (`neighbours.pair_cell_span`), binned every step beside the grid of
-side 2h that `Simulation` keeps for the other cell-list kernels."""
+cells of side h in 3D (`neighbours.pair_cell_span`), binned every step; the grid of side
+2h that `Simulation` keeps for the other cell-list kernels is binned only in scenes that
+have one of them."""
 
 import numpy as np
 

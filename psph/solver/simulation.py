@@ -133,11 +133,11 @@ class Simulation(Stages):
         # the pair sweep's grid: cells of side h in 3D (`neighbours.pair_cell_span`), a grid
         # of its own beside the one of side 2h, which the other cell-list kernels keep
         # and which is binned only for them; in 2D the sweep takes the grid of side 2h
-        span_cells = pair_cell_span(dim)
-        self.pair_grid = CellGrid(self.origin, self.cell_size / span_cells,
-                                  np.ceil(span / self.cell_size).astype(np.int64) * span_cells
-                                  + 8 * span_cells, self.store.cap) \
-            if span_cells > 1 else None
+        cells_per_2h = pair_cell_span(dim)
+        self.pair_grid = None
+        if cells_per_2h > 1:
+            self.pair_grid = CellGrid(self.origin, self.cell_size / cells_per_2h,
+                                      self.cell_max * cells_per_2h, self.store.cap)
         self.x_sorted = np.zeros((self.store.cap, dim))
         self.owned_before = np.zeros(self.store.cap + 1, np.int64)  # `count_owned`
         lay = self.layout = sum_layout(dim)
@@ -194,15 +194,22 @@ class Simulation(Stages):
         self.bad_particle = -1
         self.failure = None
         self.equilibrium = {}  # what `equilibrate` did
-        stab = scene.stabilisation
         # the grid of side 2h: the sweep's in 2D; in 3D only for the kernels that take it
+        # (Shepard, the boundary particles, the non-local strain); unbinned, its arrays
+        # are None, so that a kernel given them fails at once instead of finding nothing
         self.needs_cells = (self.pair_grid is None or self.softening is not None
-                            or self.wall_particles is not None
-                            or (stab.shepard_every > 0
-                                and (self.coupled or stab.shepard_stress)))
+                            or self.wall_particles is not None or self.shepard_filters)
         if not self.needs_cells:
-            self.cell_of = self.order = np.zeros(0, np.int64)
+            self.cell_of = self.order = self.cell_start = self.fill = None
         self.stages = self._assemble()
+
+    @property
+    def shepard_filters(self) -> bool:
+        """Whether the Shepard step runs: every `shepard_every` steps, on the pressure of a
+        coupled scene or, if asked, on the stress (a dry scene has no pressure to
+        filter)."""
+        stab = self.scene.stabilisation
+        return stab.shepard_every > 0 and (self.coupled or stab.shepard_stress)
 
     # ------------------------------------------------------------------ pipeline
 
@@ -227,8 +234,7 @@ class Simulation(Stages):
             stages.append(Stage("drained_planes", self._drained_planes))
         stab = self.scene.stabilisation
         m = stab.shepard_every
-        # a dry scene has no pressure to filter: only its stress filter, if asked
-        if m > 0 and (self.coupled or stab.shepard_stress):
+        if self.shepard_filters:
             names = ["shepard"] if self.coupled else []
             if stab.shepard_stress:
                 shepard = "stress" if self.coupled else "shepard_stress"
