@@ -2,6 +2,7 @@
 
     python bench/diagnostics/av_viscosity_dims.py            # h = 1.2 dx (the 3D scenes)
     python bench/diagnostics/av_viscosity_dims.py --h-factor 1.3 2 3 4
+    python bench/diagnostics/av_viscosity_dims.py --floor   # a floor's ghosts on its rows
 
 The viscous term of the momentum equation (Eq. 26's C_ij, `interactions.make_pair_sums`),
 a_i = -sum_j m_j Pi_ij grad_i W_ij with Pi_ij = -alpha c mu_ij / rho_ij and
@@ -57,6 +58,29 @@ def lattice_viscosity(dim: int, h_factor: float, wave: str = "shear",
     return -a / (k * k)
 
 
+def floor_dashpot(dim: int, h_factor: float, row: int) -> float:
+    """The wall-normal dashpot of a floor's mirror ghosts on the particle of lattice row
+    `row` (at z = row + 1/2 above the floor z = 0, dx = 1): its viscous acceleration a_z
+    per unit speed toward the floor, from its pairs with the ghosts (the mirror images of
+    the lattice's points below the floor, moving away from it at the same speed, so
+    each pair approaches at twice the speed; v_slip on ghost pairs has no tangential
+    part to add), alpha c = rho = m = 1. The real rows move together and add nothing."""
+    h = h_factor
+    reach = int(np.ceil(2 * h))
+    za = row + 0.5
+    a = 0.0
+    for idx in itertools.product(range(-reach, reach + 1), repeat=dim - 1):
+        for k in range(reach + 1):
+            x_ab = np.array([-i for i in idx] + [za + k + 0.5])  # x_a - x_ghost
+            r = float(np.linalg.norm(x_ab))
+            if r >= 2 * h:
+                continue
+            vdotr = -2.0 * x_ab[-1]  # v_a - v_b = -2 along z: approaching
+            mu = h * vdotr / (r * r + 0.01 * h * h)
+            a += mu * dw_cubic_dim(r, h, dim) * x_ab[-1] / r  # -m Pi grad_a W, z
+    return a
+
+
 def viscosity_ratio(h_factor: float, wave: str = "shear") -> float:
     """nu of the 3D lattice over nu of the 2D lattice, at the same alpha and h / dx."""
     return lattice_viscosity(3, h_factor, wave) / lattice_viscosity(2, h_factor, wave)
@@ -70,7 +94,20 @@ def equivalent_av_alpha(h_factor: float, wave: str = "shear", alpha_2d: float = 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--h-factor", type=float, nargs="*", default=[1.2])
+    ap.add_argument("--floor", action="store_true",
+                    help="the floor ghosts' wall-normal dashpot on the bottom rows instead")
     args = ap.parse_args()
+    if args.floor:
+        print(f"{'h / dx':>7s} {'row':>4s} {'a_z 2D':>9s} {'a_z 3D':>9s} {'3D / 2D':>8s} "
+              f"{'x 5/4':>7s}   (per unit speed toward the floor, alpha c = rho = dx = 1)")
+        for hf in args.h_factor:
+            for row in range(int(np.ceil(2 * hf))):
+                f2, f3 = floor_dashpot(2, hf, row), floor_dashpot(3, hf, row)
+                if f2 == 0.0 and f3 == 0.0:
+                    continue
+                print(f"{hf:7.2f} {row:4d} {f2:9.4f} {f3:9.4f} {f3 / f2:8.4f} "
+                      f"{1.25 * f3 / f2:7.4f}")
+        return
     print(f"{'h / dx':>7s} {'wave':>13s} {'nu 2D':>8s} {'nu 3D':>8s} {'3D / 2D':>8s} "
           f"{'3D alpha for 2D alpha = 1':>26s}   (nu / (alpha c dx))")
     for hf in args.h_factor:
