@@ -74,6 +74,18 @@ def test_images_and_the_plain_laplacian_agree_away_from_the_plane():
                           _laplacian(x, p, 0.0 * planes)[far])
 
 
+def _swept_column(seed: int):
+    """An 8 x 8 column under the plane, a random field q on it, the pair sums of q and the
+    recorded pairs: (x, vol, q, sums, pairs, grad W of the pairs)."""
+    x = _column(8, 8)
+    n = len(x)
+    vol = np.full(n, DX * DX)
+    pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
+    q = np.random.default_rng(seed).normal(size=n)
+    s, n_pairs = sums_for(x, H, vol, p=q, pairs=pairs)
+    return x, vol, q, s, pairs[0][:n_pairs], pairs[1][:n_pairs]
+
+
 def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
     """`image_sums` and `image_weights` test a pair's row a against the plane's reach once
     for a run of pairs with the same a (the sweep's order). In the sweep's order and
@@ -81,13 +93,8 @@ def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
     far rows alternate, they give what the pairs give one call each (where no run can
     carry a stale test): the same sums to the reordered additions' rounding and the same
     weights pair for pair."""
-    x = _column(8, 8)
-    n = len(x)
-    vol = np.full(n, DX * DX)
-    pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
-    q = np.random.default_rng(4).normal(size=n)
-    base, n_pairs = sums_for(x, H, vol, p=q, pairs=pairs)
-    pr, g = pairs[0][:n_pairs], pairs[1][:n_pairs]
+    x, vol, q, base, pr, g = _swept_column(4)
+    n, n_pairs = len(x), len(pr)
     ones = np.ones(n)
     # the top and the left side (x = 0, soil at larger x): each plane's pass starts its
     # runs afresh
@@ -138,16 +145,10 @@ def test_operator_with_images_is_symmetric_positive_definite_and_matches_the_sum
     definite without storage (the plane pins it), and -S q / V equals the image Laplacian
     of `image_sums` for the same q (without the gradient correction, which the operator
     does not have)."""
-    x = _column(8, 8)
-    n = len(x)
-    vol = np.full(n, DX * DX)
-    pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
-    q = np.random.default_rng(3).normal(size=n)
-    s, n_pairs = sums_for(x, H, vol, p=q, pairs=pairs)
+    x, vol, q, s, pr, g = _swept_column(3)
+    n, n_pairs = len(x), len(pr)
     planes = np.array([[1.0, TOP, -1.0, 1.0]])
-    image_sums(n, n_pairs, pairs[0], x, q, q.copy(), vol, np.ones(n), planes, H, 0.0, 0.0, 0.0,
-               s)
-    pr, g = pairs[0][:n_pairs], pairs[1][:n_pairs]
+    image_sums(n, n_pairs, pr, x, q, q.copy(), vol, np.ones(n), planes, H, 0.0, 0.0, 0.0, s)
     w, wd, wo = np.zeros(n_pairs), np.zeros(n_pairs), np.zeros(n_pairs)
     pair_weights(n_pairs, pr, g, x, np.ones(n), np.ones(n), 1.0, 0.0, w)
     storage = np.zeros(n)
