@@ -825,11 +825,12 @@ def _viscous_acceleration(dim, alpha, c, k):
 
 
 def test_artificial_viscosity_is_weaker_in_3d_at_one_alpha():
-    """Monaghan's viscosity acts as nu = alpha h c / (2 (d + 2)): at one alpha a 3D
-    lattice whose every y-layer carries a 2D shear flow (the slab between mirror walls,
-    `collapse_saturated_3d`) is 0.86 as viscous as the 2D lattice at h = 1.2 dx (4 / 5
-    for a large h / dx; `bench/diagnostics/av_viscosity_dims.py`). The sweeps' sums are
-    the numpy sums of the term in both dimensions."""
+    """Monaghan's viscosity, on every pair, acts as nu = alpha h c / (2 (d + 2)); psph's
+    switch (approaching pairs only) halves it in either dimension, so the ratio stands:
+    at one alpha a 3D lattice whose every y-layer carries a 2D shear flow (the slab
+    between mirror walls, `collapse_saturated_3d`) is 0.86 as viscous as the 2D lattice
+    at h = 1.2 dx (4 / 5 for a large h / dx; `bench/diagnostics/av_viscosity_dims.py`).
+    The sweeps' sums are the numpy sums of the term in both dimensions."""
     alpha, c, k = 1.0, 3.0, 0.2
     a2, ref2 = _viscous_acceleration(2, alpha, c, k)
     a3, ref3 = _viscous_acceleration(3, alpha, c, k)
