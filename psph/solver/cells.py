@@ -1,7 +1,7 @@
-"""A cell list of the particle store's rows with its own arrays: the pair sweep's grid of
-cells of side h in 3D (`neighbours.pair_cell_span`), binned every step; the grid of side
-2h that `Simulation` keeps for the other cell-list kernels is binned only in scenes that
-have one of them."""
+"""A cell list of the particle store's rows with its own arrays. `Simulation` keeps two:
+the grid of side 2h (the pair sweep's in 2D; Shepard's, the boundary particles' and the
+non-local strain's, binned in 3D only in scenes that have one of them) and, in 3D, the
+pair sweep's grid of cells of side h (`neighbours.pair_cell_span`)."""
 
 import numpy as np
 

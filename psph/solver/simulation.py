@@ -124,12 +124,9 @@ class Simulation(Stages):
         self.origin = np.array(lo, float) - 4.0 * self.cell_size
         span = np.array(hi, float) - np.array(lo, float)
         self.cell_max = (np.ceil(span / self.cell_size) + 8).astype(np.int64)
-        self.grid_lo = np.zeros(dim, np.int64)
-        self.ncell = np.zeros(dim, np.int64)
-        self.cell_start = np.zeros(1024, np.int64)
-        self.fill = np.zeros(1024, np.int64)
-        self.cell_of = np.zeros(self.store.cap, np.int64)
-        self.order = np.zeros(self.store.cap, np.int64)
+        # the grid of side 2h: the pair sweep's in 2D, the other cell-list kernels' in both
+        self.cells = CellGrid(self.origin, self.cell_size, self.cell_max, self.store.cap)
+        self._cell_arrays()
         # the pair sweep's grid: cells of side h in 3D (`neighbours.pair_cell_span`), a grid
         # of its own beside the one of side 2h, which the other cell-list kernels keep
         # and which is binned only for them; in 2D the sweep takes the grid of side 2h
@@ -200,8 +197,17 @@ class Simulation(Stages):
         self.needs_cells = (self.pair_grid is None or self.softening is not None
                             or self.wall_particles is not None or self.shepard_filters)
         if not self.needs_cells:
-            self.cell_of = self.order = self.cell_start = self.fill = None
+            self.cells = None
+            self._cell_arrays()
         self.stages = self._assemble()
+
+    def _cell_arrays(self) -> None:
+        """The grid of side 2h's arrays as the kernels take them (None where it is not
+        binned); again after each binning, which may grow them."""
+        g = self.cells
+        self.cell_of, self.cell_start, self.order, self.ncell, self.grid_lo = (
+            (g.cell_of, g.cell_start, g.order, g.ncell, g.lo) if g is not None
+            else (None,) * 5)
 
     @property
     def shepard_filters(self) -> bool:
@@ -265,10 +271,11 @@ class Simulation(Stages):
     def state_bytes(self) -> int:
         """Bytes of the running state on this rank: the particle store's arrays and the
         simulation's own (scratch, cell lists, the pair grid's, pair lists, bookkeeping)."""
-        grid = vars(self.pair_grid).values() if self.pair_grid is not None else ()
-        arrays = list(self.store.arrays.values()) + [
-            a for a in (*vars(self).values(), *grid) if isinstance(a, np.ndarray)]
-        return int(sum(a.nbytes for a in arrays))
+        grids = [vars(g).values() for g in (self.cells, self.pair_grid) if g is not None]
+        arrays = {id(a): a for a in (*self.store.arrays.values(), *vars(self).values(),
+                                     *(a for g in grids for a in g))
+                  if isinstance(a, np.ndarray)}  # each once: the grids' are attributes too
+        return int(sum(a.nbytes for a in arrays.values()))
 
     # ------------------------------------------------------------------ stepping
 

@@ -20,7 +20,7 @@ from psph.kernels.bundles import (
 )
 from psph.kernels.ghosts import make_ghosts, wall_contact
 from psph.kernels.interactions import symmetric_gradient_sums
-from psph.kernels.neighbours import bin_particles, count_owned, gather_sorted, grid_bounds
+from psph.kernels.neighbours import count_owned, gather_sorted
 from psph.kernels.shifting import (
     FREE_TRACE,
     FREE_TRACE_3D,
@@ -121,17 +121,8 @@ class Stages:
             self.pair_grid.bin(st.x, st.key, n)
         if not self.needs_cells:
             return
-        if self.cell_of.shape[0] < st.cap:
-            self.cell_of = np.zeros(st.cap, np.int64)
-            self.order = np.zeros(st.cap, np.int64)
-        grid_bounds(st.x, n, self.origin, self.cell_size, self.cell_max, self.grid_lo,
-                    self.ncell)
-        nc = int(np.prod(self.ncell))
-        if self.cell_start.shape[0] < nc + 1:
-            self.cell_start = np.zeros(2 * nc + 1, np.int64)
-            self.fill = np.zeros(2 * nc + 1, np.int64)
-        bin_particles(st.x, st.key, n, self.origin, self.cell_size, self.grid_lo, self.ncell,
-                      self.cell_of, self.cell_start, self.fill, self.order)
+        self.cells.bin(st.x, st.key, n)
+        self._cell_arrays()
 
     def _drained_planes(self) -> None:
         """The free drained sides' planes at this step (collective)."""
