@@ -5,6 +5,12 @@ radius r_i and height h_i, a = h_i / r_i, the run-out
 
     (r_inf - r_i) / r_i = 1.24 a          for a < 1.7,
                         = 1.6 a^(1/2)     for a > 1.7.
+
+Lube et al.'s own fit of the final height could not be read here (only abstracts of the
+paper are in reach), so the height is set beside the axisymmetric fit of Lajeunesse,
+Monnier and Homsy (2005, "Granular slumping on a horizontal surface", Phys. Fluids 17,
+a semicircular tube) as Kumar (2015, PhD thesis, Cambridge, Chapter 2) quotes it:
+h_inf / r_i = a for a < 0.74 (the top undisturbed, as Lube et al. observe too), 0.74 above.
 """
 
 import h5py
@@ -17,6 +23,12 @@ from psph.verify.distributed import percentiles, read_share
 def lube_runout(a: float) -> float:
     """Lube et al.'s normalised run-out (r_inf - r_i) / r_i at aspect ratio a."""
     return 1.24 * a if a < 1.7 else 1.6 * a ** 0.5
+
+
+def published_height(a: float) -> float:
+    """The axisymmetric final height h_inf / r_i at aspect ratio a of Lajeunesse et al.
+    (2005) as quoted in the module docstring."""
+    return a if a < 0.74 else 0.74
 
 
 def radial_metrics(x: np.ndarray, axis_xy, dx: float, comm=None) -> dict:
@@ -59,5 +71,8 @@ def axisymmetric_verification(path, scene, comm) -> dict:
         "runout_error": runout / law - 1.0,
         "final_height_m": last["final_height_m"],
         "final_height_over_initial_radius": last["final_height_m"] / ri,
+        "height_reference": "Lajeunesse et al. (2005), axisymmetric, as quoted by Kumar "
+                            "(2015): h_inf / r_i = a (a < 0.74), 0.74 (a > 0.74)",
+        "published_height_over_initial_radius": published_height(a),
         "time_s": last["time_s"],
         "series": {k: [m[k] for m in series] for k in series[0]}}}
