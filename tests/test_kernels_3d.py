@@ -837,3 +837,63 @@ def test_artificial_viscosity_is_weaker_in_3d_at_one_alpha():
     assert a2 == pytest.approx(ref2, rel=1e-12) and a3 == pytest.approx(ref3, rel=1e-12)
     assert a2 < 0.0 and a3 < 0.0  # the flow at the centre (v_x = 1, a maximum) is slowed
     assert a3 / a2 == pytest.approx(0.860, abs=0.002)
+
+
+def _artificial_stress_acceleration(dim, n_exp):
+    """The x-acceleration of the artificial stress (the f^n (R_i + R_j) part of Eq. 26's
+    pair stress in the DVDT sums) at the centre particle of a lattice (dx = 1, rho = 1,
+    h = 1.2) whose R_xx = x (the other components 0, no stress, no pressure), from the
+    pair sweep of `dim`, and the same sum in numpy."""
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
+    from psph.kernels.interactions import pair_sums, pair_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    h, side = 1.2, 9
+    g = np.arange(side) - side // 2 + 0.0
+    x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
+    n = len(x)
+    centre = int(np.argmin(np.linalg.norm(x, axis=1)))
+    z = np.zeros
+    astress = z((n, 3 if dim == 2 else 6))
+    astress[:, 0] = x[:, 0]
+    fields = PairFields(x, z((n, dim)), z((n, dim)), z((n, 4 if dim == 2 else 6)), z(n), z(n),
+                        np.full(n, 0.4), np.ones(n), np.ones(n), np.ones(n), z((n, dim)),
+                        astress)
+    lay = sum_layout(dim)
+    sums = z((n, lay.NSUMS))
+    w_dx = w_cubic_dim(1.0, h, dim)
+    sweep = pair_sums if dim == 2 else pair_sums_3d
+    sweep(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x),
+          PairParams(h, coupled=False, as_n=n_exp, w_dx=w_dx).typed(), sums,
+          PairRecord(z((0, 2), np.int64), z((0, dim))))
+    xb = x - x[centre]
+    r = np.linalg.norm(xb, axis=1)
+    near = (r > 0) & (r < 2 * h)
+    f = np.array([(w_cubic_dim(ri, h, dim) / w_dx) ** n_exp for ri in r[near]])
+    dw = np.array([dw_cubic_dim(ri, h, dim) for ri in r[near]])
+    numpy_sum = np.sum(f * xb[near, 0] ** 2 * -dw / r[near])
+    return sums[centre, lay.DVDT], numpy_sum
+
+
+def test_artificial_stress_is_weaker_in_3d_at_one_epsilon():
+    """The artificial stress's pair sum, for a smooth R, is the moment
+    M_f = sum_j V_j f^n x_ji (x) (-grad_i W_ij) times grad R: a stress of its own that
+    does not vanish with dx, and at h = 1.2 dx and n = 2.55 the cubic lattice's moment is
+    0.614 of the square one's (0.319 against 0.520). So at one epsilon a slab whose
+    y-layers carry a 2D field (`collapse_saturated_3d`) has 0.61 of the 2D scene's
+    artificial stress: the cause of the contractive slab's excess pore pressure
+    (docs/vv/collapse_saturated_3d.md; `bench/tools/lattice_sums.py`, whose epsilon
+    ratio `--as-2d` uses, is checked against the sweeps here)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench" / "tools"))
+    from lattice_sums import artificial_stress_moment
+
+    a2, ref2 = _artificial_stress_acceleration(2, 2.55)
+    a3, ref3 = _artificial_stress_acceleration(3, 2.55)
+    assert a2 == pytest.approx(ref2, rel=1e-12) and a3 == pytest.approx(ref3, rel=1e-12)
+    assert a2 == pytest.approx(artificial_stress_moment(2, 1.2, 2.55), rel=1e-12)
+    assert a3 == pytest.approx(artificial_stress_moment(3, 1.2, 2.55), rel=1e-12)
+    assert a2 == pytest.approx(0.520, abs=0.001) and a3 == pytest.approx(0.319, abs=0.001)
+    assert a3 / a2 == pytest.approx(0.614, abs=0.002)

@@ -6,6 +6,7 @@ tail or its bulk.
     python bench/diagnostics/collapse_saturated_fields.py RUN [RUN ...]
     python bench/diagnostics/collapse_saturated_fields.py --tail RUN [RUN ...]
     python bench/diagnostics/collapse_saturated_fields.py --layers SLAB_RUN
+    python bench/diagnostics/collapse_saturated_fields.py --regions RUN [RUN ...]
 
 RUN is an output directory of `psph run collapse_saturated_psi<psi>` or of
 `collapse_saturated_3d` (`bench/verification/collapse_saturated_3d.py` writes them under
@@ -20,6 +21,9 @@ their x and of their height z above the floor, x's range) and their sign.
 `--layers` (a slab only): how far its y-layers have parted, per snapshot: the spread over
 the layers of the particles that started at one x-z site (of x-z position, n and p) and
 |u_y|; to round-off the slab is the 2D flow on the y-summed 3D kernel.
+`--regions`: the mean signed excess p (kPa) of the particles grouped by where they
+started (x from the back wall in 1 m bands, height in four bands), per snapshot, and the
+mean speed: where two runs' excess pressures part.
 """
 
 import argparse
@@ -66,6 +70,30 @@ def tail_rows(out: Path) -> list[str]:
     return lines
 
 
+X_BANDS = (1.0, 2.0, 3.0)  # m from the back wall x = 0
+Z_BANDS = (0.25, 1.0, 1.75)  # m above the floor
+
+
+def region_rows(out: Path) -> list[str]:
+    """Per snapshot and initial x band: the mean signed excess p (kPa) in each initial
+    height band (`X_BANDS`, `Z_BANDS`), and the snapshot's mean speed."""
+    scene = run_scene(out)
+    snaps = read_snapshots(out / "particles.h5")
+    first = plane_strain_view(snaps[0])["x"]
+    xb = np.digitize(first[:, 0], X_BANDS)
+    zb = np.digitize(first[:, -1], Z_BANDS)
+    lines = []
+    for snap in snaps[1:]:
+        view = plane_strain_view(snap)
+        excess = excess_pressure(view, scene) / 1e3
+        speed = np.linalg.norm(view["v"], axis=1).mean()
+        for i in range(len(X_BANDS) + 1):
+            cells = " ".join(f"{excess[(xb == i) & (zb == j)].mean():7.2f}"
+                             for j in range(len(Z_BANDS) + 1))
+            lines.append(f"{out.name:34s} {snap['time']:5.2f} {i:>6d} {cells} {speed:7.3f}")
+    return lines
+
+
 def layer_rows(out: Path) -> list[str]:
     """Per snapshot, the 99th percentiles over the x-z sites of the spread over a site's
     y-layers of x-z position, n and p, and over the particles of |u_y|. The sites are
@@ -105,6 +133,8 @@ def main() -> None:
     mode = ap.add_mutually_exclusive_group()
     mode.add_argument("--tail", action="store_true", help="where the top 1 %% of |excess p| sits")
     mode.add_argument("--layers", action="store_true", help="how far a slab's layers parted")
+    mode.add_argument("--regions", action="store_true",
+                      help="mean excess p by where the particles started")
     args = ap.parse_args()
     if args.tail:
         print(f"{'run':34s} {'t (s)':>5s} {'x med':>7s} {'x range':>13s} {'z med':>7s} "
@@ -115,6 +145,11 @@ def main() -> None:
               f"{'|u_y| mm':>9s}   (p99 over the x-z sites of the spread over a site's layers; "
               "|u_y|: p99 over the particles)")
         make = layer_rows
+    elif args.regions:
+        bands = " ".join(f"{b:>7s}" for b in ("z<0.25", "<1", "<1.75", ">1.75"))
+        print(f"{'run':34s} {'t (s)':>5s} {'x band':>6s} {bands} {'|v|':>7s}   (mean excess "
+              "p, kPa, by initial height band; x bands 0-1, 1-2, 2-3, >3 m; |v|: mean, m/s)")
+        make = region_rows
     else:
         print(f"{'run':34s} {'t (s)':>5s} {'p50':>7s} {'p95':>7s} {'p99':>7s} {'mean ex':>7s} "
               f"{'eps_p':>8s} {'n - n0':>9s} {'yielded':>7s} {'p = 0':>7s}   (|excess p| and "

@@ -9,6 +9,8 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
                                         # both at another dx (the slab stays 4 dx thick)
     python bench/verification/collapse_saturated_3d.py --psi -5 --nu-2d
                                         # the slab at the 2D scene's viscosity
+    python bench/verification/collapse_saturated_3d.py --psi -5 --nu-2d --as-2d
+                                        # ... and at its artificial stress
 
 `--nu-2d` runs the slab at the artificial viscosity of the 2D scene rather than at its
 alpha: Monaghan's term acts as nu = alpha h c / (2 (d + 2)), so at the same alpha a 3D
@@ -18,6 +20,11 @@ is then the 2D scene's times 5 / 4, the continuum's ratio. The slab's run direct
 the JSON and PNG get `_nu2d` after the other tags; the 2D run is the untagged one, so
 with `--reuse` it is shared. Several psi in one command share one JSON and PNG; a
 later command with the same tags overwrites them.
+
+`--as-2d` runs the slab at the artificial stress of the 2D scene rather than at its
+epsilon: the term's moment on the lattice (bench/tools/lattice_sums.py) is 0.61 as strong
+on the cubic lattice as on the square one at h = 1.2 dx and n = 2.55, so the slab's
+epsilon is the 2D scene's over that ratio (0.5 -> 0.814). Tag `_as2d`.
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
@@ -42,7 +49,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench" / "tools"))
+from lattice_sums import artificial_stress_3d_over_2d  # noqa: E402
 from scene_runs import run_scene  # noqa: E402
+
+from psph.config.load import load_scene  # noqa: E402
 
 OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "collapse_saturated_3d"
@@ -68,6 +78,15 @@ def nu_2d_settings(psi: str) -> list[str]:
     path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
     alpha = tomllib.loads(path.read_text())["stabilisation"]["av_alpha"]
     return [f"stabilisation.av_alpha={alpha * ALPHA_3D_OVER_2D:g}"]
+
+
+def as_2d_settings(psi: str) -> list[str]:
+    """The slab's artificial stress set to the 2D scene's strength on the lattice
+    (`--as-2d`)."""
+    scene = load_scene(f"collapse_saturated_psi{psi}")
+    st = scene.stabilisation
+    ratio = artificial_stress_3d_over_2d(scene.particles.h_factor, st.artificial_stress_n)
+    return [f"stabilisation.artificial_stress={st.artificial_stress / ratio:.3f}"]
 
 
 def numbers(s: dict) -> dict:
@@ -113,6 +132,8 @@ def main() -> None:
     ap.add_argument("--end", type=float, help="end time of both runs (scene: 1.2 s)")
     ap.add_argument("--nu-2d", action="store_true",
                     help="the slab at the 2D scene's viscosity (alpha x 5/4)")
+    ap.add_argument("--as-2d", action="store_true",
+                    help="the slab at the 2D scene's artificial stress (epsilon / 0.61)")
     args = ap.parse_args()
     common, tag = [], ""
     if args.dx is not None:
@@ -125,12 +146,13 @@ def main() -> None:
     if args.end is not None:
         common.append(f"time.end={args.end}")
         tag += f"_end{args.end:g}"
-    tag3 = tag + ("_nu2d" if args.nu_2d else "")
+    tag3 = tag + ("_nu2d" if args.nu_2d else "") + ("_as2d" if args.as_2d else "")
     rows = {}
     for psi in args.psi:
         s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
                  args.reuse)
-        nu = nu_2d_settings(psi) if args.nu_2d else []
+        nu = (nu_2d_settings(psi) if args.nu_2d else []) + (
+            as_2d_settings(psi) if args.as_2d else [])
         s3 = run(RUNS / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
                  plasticity_settings(psi) + common + slab + nu, args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
@@ -150,7 +172,7 @@ def main() -> None:
     name = f"collapse_saturated_3d{tag3}"
     (OUT / f"{name}.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
-         "end": args.end, "nu_2d": args.nu_2d, "rows": rows}, indent=1) + "\n")
+         "end": args.end, "nu_2d": args.nu_2d, "as_2d": args.as_2d, "rows": rows}, indent=1) + "\n")
     plot(rows, OUT / f"{name}.png", tag3)
     print(f"wrote {OUT / name}.json and .png")
 
