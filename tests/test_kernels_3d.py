@@ -787,41 +787,57 @@ def test_particle_shifting_in_3d():
     assert np.all(grad_c[under_edge][:, [0, 2]] < -1e-3 * np.abs(grad_c).max())
 
 
+def _centre_sums(dim, params, v_x=None, r_xx=None):
+    """The pair sweep of `dim` over a lattice (dx = 1, rho = 1, V = 1, h = 1.2, 9 points a
+    side, no stress, no pressure) with v_x and the artificial stress's R_xx given as
+    functions of the positions: (x, the centre's row, its DVDT x-sum)."""
+    from psph.kernels.bundles import PairFields, PairRecord, sorted_cells
+    from psph.kernels.interactions import pair_sums, pair_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    side = 9
+    g = np.arange(side) - side // 2 + 0.0
+    x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
+    n = len(x)
+    centre = int(np.argmin(np.linalg.norm(x, axis=1)))
+    z = np.zeros
+    v = z((n, dim))
+    if v_x is not None:
+        v[:, 0] = v_x(x)
+    astress = z((n, 3 if dim == 2 else 6))  # the artificial stress's columns
+    if r_xx is not None:
+        astress[:, 0] = r_xx(x)
+    fields = PairFields(x, v, v.copy(), z((n, 4 if dim == 2 else 6)), z(n), z(n),
+                        np.full(n, 0.4), np.ones(n), np.ones(n), np.ones(n), z((n, dim)),
+                        astress)
+    lay = sum_layout(dim)
+    sums = z((n, lay.NSUMS))
+    sweep = pair_sums if dim == 2 else pair_sums_3d
+    sweep(n, n, n, fields, sorted_cells(*pair_cell_lists(x, params.h), x), params.typed(),
+          sums, PairRecord(z((0, 2), np.int64), z((0, dim))))
+    return x, centre, sums[centre, lay.DVDT]
+
+
 def _viscous_acceleration(dim, alpha, c, k):
     """The x-acceleration of Monaghan's viscosity (the -sum m_j Pi_ij grad W part of
     Eq. 26's DVDT sums) at the centre particle of a lattice (dx = 1, rho = 1, h = 1.2)
     in the shear flow v_x = cos(k z) (z the last axis), from the pair sweep of `dim`,
     and the same sum in numpy over the centre's neighbours."""
-    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
-    from psph.kernels.interactions import pair_sums, pair_sums_3d
-    from psph.kernels.sum_columns import sum_layout
+    from psph.kernels.bundles import PairParams
 
-    h, side = 1.2, 9
-    g = np.arange(side) - side // 2 + 0.0
-    x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
-    n = len(x)
-    centre = int(np.argmin(np.linalg.norm(x, axis=1)))
-    v = np.zeros((n, dim))
-    v[:, 0] = np.cos(k * x[:, -1])
-    z = np.zeros
-    n_stress = 4 if dim == 2 else 6
-    n_astress = 3 if dim == 2 else 6  # the artificial stress's columns (off here)
-    fields = PairFields(x, v, v.copy(), z((n, n_stress)), z(n), z(n), np.full(n, 0.4),
-                        np.ones(n), np.ones(n), np.ones(n), z((n, dim)), z((n, n_astress)))
-    lay = sum_layout(dim)
-    sums = z((n, lay.NSUMS))
-    sweep = pair_sums if dim == 2 else pair_sums_3d
-    sweep(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x),
-          PairParams(h, av_alpha=alpha, c_sound=c, coupled=False).typed(), sums,
-          PairRecord(z((0, 2), np.int64), z((0, dim))))
+    h = 1.2
+    x, centre, acc = _centre_sums(dim, PairParams(h, av_alpha=alpha, c_sound=c,
+                                                  coupled=False),
+                                  v_x=lambda x: np.cos(k * x[:, -1]))
+    v = np.cos(k * x[:, -1])
     xab = x[centre] - x
     r = np.linalg.norm(xab, axis=1)
     near = (r > 0) & (r < 2 * h)
-    vdotr = (v[centre, 0] - v[near, 0]) * xab[near, 0]
+    vdotr = (v[centre] - v[near]) * xab[near, 0]
     mu = np.where(vdotr < 0, h * vdotr / (r[near] ** 2 + 0.01 * h * h), 0.0)
     dw = np.array([dw_cubic_dim(ri, h, dim) for ri in r[near]])
     numpy_sum = np.sum(alpha * c * mu * dw * xab[near, 0] / r[near])
-    return sums[centre, lay.DVDT], numpy_sum
+    return acc, numpy_sum
 
 
 def test_artificial_viscosity_is_weaker_in_3d_at_one_alpha():
@@ -842,37 +858,21 @@ def test_artificial_viscosity_is_weaker_in_3d_at_one_alpha():
 def _artificial_stress_acceleration(dim, n_exp):
     """The x-acceleration of the artificial stress (the f^n (R_i + R_j) part of Eq. 26's
     pair stress in the DVDT sums) at the centre particle of a lattice (dx = 1, rho = 1,
-    h = 1.2) whose R_xx = x (the other components 0, no stress, no pressure), from the
-    pair sweep of `dim`, and the same sum in numpy."""
-    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
-    from psph.kernels.interactions import pair_sums, pair_sums_3d
-    from psph.kernels.sum_columns import sum_layout
+    h = 1.2) whose R_xx = x (the other components 0), from the pair sweep of `dim`, and
+    the same sum in numpy."""
+    from psph.kernels.bundles import PairParams
 
-    h, side = 1.2, 9
-    g = np.arange(side) - side // 2 + 0.0
-    x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
-    n = len(x)
-    centre = int(np.argmin(np.linalg.norm(x, axis=1)))
-    z = np.zeros
-    astress = z((n, 3 if dim == 2 else 6))
-    astress[:, 0] = x[:, 0]
-    fields = PairFields(x, z((n, dim)), z((n, dim)), z((n, 4 if dim == 2 else 6)), z(n), z(n),
-                        np.full(n, 0.4), np.ones(n), np.ones(n), np.ones(n), z((n, dim)),
-                        astress)
-    lay = sum_layout(dim)
-    sums = z((n, lay.NSUMS))
+    h = 1.2
     w_dx = w_cubic_dim(1.0, h, dim)
-    sweep = pair_sums if dim == 2 else pair_sums_3d
-    sweep(n, n, n, fields, sorted_cells(*pair_cell_lists(x, h), x),
-          PairParams(h, coupled=False, as_n=n_exp, w_dx=w_dx).typed(), sums,
-          PairRecord(z((0, 2), np.int64), z((0, dim))))
+    x, centre, acc = _centre_sums(dim, PairParams(h, coupled=False, as_n=n_exp, w_dx=w_dx),
+                                  r_xx=lambda x: x[:, 0])
     xb = x - x[centre]
     r = np.linalg.norm(xb, axis=1)
     near = (r > 0) & (r < 2 * h)
     f = np.array([(w_cubic_dim(ri, h, dim) / w_dx) ** n_exp for ri in r[near]])
     dw = np.array([dw_cubic_dim(ri, h, dim) for ri in r[near]])
     numpy_sum = np.sum(f * xb[near, 0] ** 2 * -dw / r[near])
-    return sums[centre, lay.DVDT], numpy_sum
+    return acc, numpy_sum
 
 
 def test_artificial_stress_is_weaker_in_3d_at_one_epsilon():
