@@ -877,13 +877,13 @@ def _artificial_stress_acceleration(dim, n_exp):
 
 def test_artificial_stress_is_weaker_in_3d_at_one_epsilon():
     """The artificial stress's pair sum, for a smooth R, is the moment
-    M_f = sum_j V_j f^n x_ji (x) (-grad_i W_ij) times grad R: a stress of its own that
-    does not vanish with dx, and at h = 1.2 dx and n = 2.55 the cubic lattice's moment is
-    0.614 of the square one's (0.319 against 0.520). So at one epsilon a slab whose
-    y-layers carry a 2D field (`collapse_saturated_3d`) has 0.61 of the 2D scene's
-    artificial stress: the cause of the contractive slab's excess pore pressure
-    (docs/vv/collapse_saturated_3d.md; `bench/tools/lattice_sums.py`, whose epsilon
-    ratio `--as-2d` uses, is checked against the sweeps here)."""
+    M_f = sum_j V_j f^n x_ji (x) grad_i W_ij (as M of Eq. 22) times grad R: a stress of
+    its own that does not vanish with dx, and at h = 1.2 dx and n = 2.55 the cubic
+    lattice's moment is 0.614 of the square one's (0.319 against 0.520). So at one
+    epsilon a slab whose y-layers carry a 2D field (`collapse_saturated_3d`) has 0.61 of
+    the 2D scene's artificial stress: the cause of the contractive slab's excess pore
+    pressure (docs/vv/collapse_saturated_3d.md). `bench/tools/lattice_sums.py`, whose
+    epsilon ratio the bench's `--as-2d` uses, is checked against the sweeps here."""
     import sys
     from pathlib import Path
 

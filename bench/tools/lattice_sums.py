@@ -3,9 +3,10 @@ setting a 3D scene's stabilisation to a 2D scene's strength (the plane-strain ch
 
 The artificial stress of Eq. (26)'s C_ij (Gray, Monaghan & Swift 2001, the paper's refs.
 [11, 18]) adds to a pair's stress sum f_ij^n (R_i + R_j), f_ij = W(r_ij) / W(dx), with
-R = epsilon times the tensile principal stresses. For a smooth R on the lattice the
-pair sum -sum_j V_j f^n (R_i + R_j) grad_i W_ij / rho is, to first order, M_f . grad R /
-rho with the moment M_f = sum_j V_j f^n x_ji (x) (-grad_i W_ij) (the sum with R_i cancels
+R = -epsilon times the tensile principal effective stresses
+(`psph/kernels/artificial_stress.py`). For a smooth R on the lattice the
+pair sum sum_j V_j f^n (R_i + R_j) grad_i W_ij / rho is, to first order, M_f . grad R /
+rho with the moment M_f = sum_j V_j f^n x_ji (x) grad_i W_ij (the sum with R_i cancels
 on a symmetric lattice): a stress of its own that does not vanish as dx falls, and whose
 moment depends on the dimension at one h / dx. At h = 1.2 dx and n = 2.55 M_f is 0.520
 on the square lattice and 0.319 on the cubic one, so at one epsilon a 3D lattice (a slab
