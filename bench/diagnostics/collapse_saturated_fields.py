@@ -79,6 +79,8 @@ def region_rows(out: Path) -> list[str]:
     height band (`X_BANDS`, `Z_BANDS`), and the snapshot's mean speed."""
     scene = run_scene(out)
     snaps = read_snapshots(out / "particles.h5")
+    if snaps[0]["time"] != 0.0:
+        raise SystemExit(f"{out}: --regions needs the run's t = 0 snapshot")
     first = plane_strain_view(snaps[0])["x"]
     xb = np.digitize(first[:, 0], X_BANDS)
     zb = np.digitize(first[:, -1], Z_BANDS)

@@ -1,6 +1,8 @@
 """Lattice sums of the pair terms of Eq. (26) that carry a stabilisation, in 2D and 3D, for
 setting a 3D scene's stabilisation to a 2D scene's strength (the plane-strain checks).
 
+    python bench/tools/lattice_sums.py 1.2 1.3 1.5 2    # M_f in 2D and 3D at these h / dx
+
 The artificial stress of Eq. (26)'s C_ij (Gray, Monaghan & Swift 2001, the paper's refs.
 [11, 18]) adds to a pair's stress sum f_ij^n (R_i + R_j), f_ij = W(r_ij) / W(dx), with
 R = -epsilon times the tensile principal effective stresses
@@ -41,3 +43,11 @@ def artificial_stress_moment(dim: int, h_factor: float, n: float) -> float:
 def artificial_stress_3d_over_2d(h_factor: float, n: float) -> float:
     """The 3D lattice's artificial stress over the 2D lattice's at one epsilon."""
     return artificial_stress_moment(3, h_factor, n) / artificial_stress_moment(2, h_factor, n)
+
+
+if __name__ == "__main__":
+    import sys
+
+    for hf in [float(a) for a in sys.argv[1:]] or [1.2]:
+        m2, m3 = artificial_stress_moment(2, hf, 2.55), artificial_stress_moment(3, hf, 2.55)
+        print(f"h = {hf:g} dx, n = 2.55: M_f 2D {m2:.3f}, 3D {m3:.3f}, 3D / 2D {m3 / m2:.3f}")
