@@ -715,7 +715,7 @@ def test_particle_shifting_in_3d():
     shift runs down the concentration gradient (the interior's mean |grad C| falls after
     ten shifts), the surface row stays, and a rigid motion (|L| = 0) moves nothing."""
     from psph.kernels.interactions import symmetric_gradient_sums
-    from psph.kernels.shifting import FREE_TRACE_3D, SURFACE_TRACE_3D, shift_particles_3d
+    from psph.kernels.shifting import SURFACE_TRACE_3D, shift_particles_3d
 
     dx, n, h = 0.1, 8, 0.12
     vol = np.full(n ** 3, dx ** 3)
@@ -731,7 +731,7 @@ def test_particle_shifting_in_3d():
         sums, grad_c = grad_c_and_sums(x, v)
         shift = np.zeros_like(x)
         shift_particles_3d(len(x), grad_c, sums, 1.0, h, 0.05, 0.05 * dx, SURFACE_TRACE_3D,
-                           FREE_TRACE_3D, x, shift)
+                           x, shift)
         return shift, sums
 
     x = lattice_3d(n, dx, 0.2, seed=5)
@@ -747,21 +747,25 @@ def test_particle_shifting_in_3d():
         shift, sums = step(y, shear)
     after = np.linalg.norm(grad_c_and_sums(y, shear)[1][inner], axis=1).mean()
     assert after < 0.8 * before, (before, after)
+    from psph.kernels.free_surface import on_free_surface
     from psph.kernels.sum_columns import sum_layout
 
     cm = sum_layout(3).M
+
+    def free(sums):
+        return np.array([on_free_surface(row, cm, 3) for row in sums])
+
     assert np.linalg.norm(shift[inner], axis=1).min() > 0.0
-    # one shift of a cube jittered by 0.05 dx: the surface row (trace below
-    # FREE_TRACE_3D) does not move, no shift is longer than the cap. (The row under it is
+    # one shift of a cube jittered by 0.05 dx: the surface row (on the free surface of
+    # free_surface.py) does not move, no shift is longer than the cap. (The row under it is
     # shifted along the face's normal from M; in 3D the cut changes trace(M) there by
     # 1.5 % (2.90 against 2.945), against 3 % in 2D, and a jittered face's M is as
     # anisotropic as that, so that normal is not tested here.)
     x = lattice_3d(n, dx, 0.05, seed=6)
     before = x.copy()
     shift, sums = step(x, shear)
-    trace = sums[:, cm] + sums[:, cm + 4] + sums[:, cm + 8]
     side = np.all((before[:, :2] > 2.5 * dx) & (before[:, :2] < (n - 2.5) * dx), axis=1)
-    top = side & (before[:, 2] > (n - 1) * dx) & (trace < FREE_TRACE_3D)
+    top = side & (before[:, 2] > (n - 1) * dx) & free(sums)
     assert top.sum() >= 4 and np.all(shift[top] == 0.0)
     assert np.linalg.norm(shift, axis=1).max() <= 0.05 * dx * (1 + 1e-12)
     # on a regular lattice grad C is the cut support's alone: the row under the top face
@@ -773,7 +777,7 @@ def test_particle_shifting_in_3d():
     _, grad_c = grad_c_and_sums(x, shear)
     shift, sums = step(x, shear)
     trace = sums[:, cm] + sums[:, cm + 4] + sums[:, cm + 8]
-    second = (trace >= FREE_TRACE_3D) & (trace < SURFACE_TRACE_3D)
+    second = ~free(sums) & (trace < SURFACE_TRACE_3D)
     row = np.round(before / dx - 0.5).astype(int)
     under_face = second & (row[:, 2] == n - 2) & np.all((row[:, :2] >= 2) & (row[:, :2] <= n - 3),
                                                         axis=1)
@@ -897,3 +901,102 @@ def test_artificial_stress_is_weaker_in_3d_at_one_epsilon():
     assert a3 == pytest.approx(artificial_stress_moment(3, 1.2, 2.55), rel=1e-12)
     assert a2 == pytest.approx(0.520, abs=0.001) and a3 == pytest.approx(0.319, abs=0.001)
     assert a3 / a2 == pytest.approx(0.614, abs=0.002)
+
+
+def test_the_slab_scene_carries_the_2d_scenes_stabilisation_strengths():
+    """`collapse_saturated_3d`'s alpha and epsilon are the 2D scenes' strengths on the
+    cubic lattice: alpha x 5/4 (nu = alpha h c / (2 (d + 2))) and epsilon over the lattice
+    moments' ratio of `bench/tools/lattice_sums.py` (checked against the sweeps above)."""
+    import sys
+    from pathlib import Path
+
+    from psph.config.load import load_scene
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench" / "tools"))
+    from lattice_sums import artificial_stress_3d_over_2d
+
+    slab = load_scene("collapse_saturated_3d").stabilisation
+    for psi in ("-5", "0", "2.5"):
+        scene = load_scene(f"collapse_saturated_psi{psi}")
+        st = scene.stabilisation
+        ratio = artificial_stress_3d_over_2d(scene.particles.h_factor, st.artificial_stress_n)
+        assert slab.av_alpha == pytest.approx(st.av_alpha * 5 / 4, rel=1e-12)
+        assert slab.artificial_stress == pytest.approx(st.artificial_stress / ratio, abs=5e-4)
+        assert slab.artificial_stress_n == st.artificial_stress_n
+
+
+def _lattice_moments(dim):
+    """M of Eq. (22) from the pair sweep of `dim` (dx = 1, V = 1, h = 1.2) at every point
+    of a lattice 9 points a side: the sums, the points' integer coordinates (0-8) and M's
+    first column."""
+    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
+    from psph.kernels.interactions import pair_sums, pair_sums_3d
+    from psph.kernels.sum_columns import sum_layout
+
+    g = np.arange(9) + 0.0
+    x = np.array(np.meshgrid(*([g] * dim), indexing="ij")).reshape(dim, -1).T.copy()
+    n, z = len(x), np.zeros
+    fields = PairFields(x, z((n, dim)), z((n, dim)), z((n, 4 if dim == 2 else 6)), z(n),
+                        z(n), np.full(n, 0.4), np.ones(n), np.ones(n), np.ones(n),
+                        z((n, dim)), z((n, 3 if dim == 2 else 6)))
+    lay = sum_layout(dim)
+    sums = z((n, lay.NSUMS))
+    sweep = pair_sums if dim == 2 else pair_sums_3d
+    sweep(n, n, n, fields, sorted_cells(*pair_cell_lists(x, 1.2), x),
+          PairParams(1.2, coupled=False).typed(), sums,
+          PairRecord(z((0, 2), np.int64), z((0, dim))))
+    return sums, x.astype(int), lay.M
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_free_surface_is_the_outer_row_of_a_lattice_in_both_dimensions(dim):
+    """`free_surface.on_free_surface` (issue 37): on a lattice block (h = 1.2 dx) the free
+    surface is its outer row, faces, edges and corners, in 2D (the trace of M) and in 3D
+    (M's two smallest eigenvalues), and their sums are the module docstring's: a face
+    1.281 / 1.271, the row below 1.921 / 1.920, an edge 0.786 / 0.780, a corner 0.460."""
+    from psph.kernels.free_surface import on_free_surface
+
+    sums, ijk, cm = _lattice_moments(dim)
+    free = np.array([on_free_surface(row, cm, dim) for row in sums])
+    depth = np.minimum(ijk, 8 - ijk).min(axis=1)
+    assert np.array_equal(free, depth == 0)
+
+    def two_smallest(site):
+        at = int(np.flatnonzero(np.all(ijk == site, axis=1))[0])
+        m = sums[at, cm:cm + dim * dim].reshape(dim, dim)
+        return np.sort(np.linalg.eigvalsh(0.5 * (m + m.T)))[:2].sum()
+
+    mid = [4] * (dim - 1)
+    face, below, edge = (mid + [8], mid + [7], [8] * 2 + [4] * (dim - 2))
+    want = {2: (1.281, 1.921, 0.786), 3: (1.271, 1.920, 0.780)}[dim]
+    got = tuple(two_smallest(site) for site in (face, below, edge))
+    assert np.allclose(got, want, atol=6e-4), got
+    if dim == 3:
+        assert abs(two_smallest([8, 8, 8]) - 0.460) < 6e-4
+
+
+def test_free_surface_of_a_plane_strain_slab_is_the_2d_one():
+    """Where nothing changes along y and the support is cut in the x-z plane, M is block
+    diagonal with M_yy its largest eigenvalue: the 3D test then reads the x-z block as the
+    2D test does (the 2D lattice's M with M_yy from the 3D lattice's tangent, 0.62-0.98,
+    and over random in-plane blocks)."""
+    from psph.kernels.free_surface import on_free_surface
+
+    sums2, _, cm2 = _lattice_moments(2)
+    rng = np.random.default_rng(3)
+    blocks = [row[cm2:cm2 + 4].reshape(2, 2) for row in sums2]
+    for _ in range(2000):
+        a = rng.uniform(0.2, 1.0, 2)
+        c, s = np.cos(t := rng.uniform(0, np.pi)), np.sin(t)
+        blocks.append(np.array([[c, -s], [s, c]]) @ np.diag(a) @ np.array([[c, s], [-s, c]]))
+    flagged = 0
+    for b in blocks:
+        for m_yy in (np.linalg.eigvalsh(0.5 * (b + b.T)).max() + 1e-9, 0.62, 0.78, 0.98):
+            if m_yy < np.linalg.eigvalsh(0.5 * (b + b.T)).max():
+                continue
+            m3 = np.zeros(9)
+            m3[[0, 2, 6, 8]] = b.ravel()
+            m3[4] = m_yy
+            assert on_free_surface(m3, 0, 3) == on_free_surface(b.ravel(), 0, 2), (b, m_yy)
+            flagged += on_free_surface(m3, 0, 3)
+    assert flagged > 500

@@ -7,24 +7,28 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
     python bench/verification/collapse_saturated_3d.py --reuse     # tables finished runs
     python bench/verification/collapse_saturated_3d.py --psi -5 --dx 0.08 --end 0.9
                                         # both at another dx (the slab stays 4 dx thick)
-    python bench/verification/collapse_saturated_3d.py --psi -5 --nu-2d
-                                        # the slab at the 2D scene's viscosity
-    python bench/verification/collapse_saturated_3d.py --psi -5 --nu-2d --as-2d
-                                        # ... and at its artificial stress
+    python bench/verification/collapse_saturated_3d.py --psi -5 --alpha 1 --epsilon 0.5
+                                        # the slab at the 2D scene's alpha and epsilon
 
-`--nu-2d` runs the slab at the artificial viscosity of the 2D scene rather than at its
-alpha: Monaghan's term acts as nu = alpha h c / (2 (d + 2)), so at the same alpha a 3D
-lattice is about 4 / 5 as viscous as a 2D one (at h = 1.2 dx 0.86 for a shear wave and
-0.81 for a longitudinal one, `bench/diagnostics/av_viscosity_dims.py`). The slab's alpha
-is then the 2D scene's times 5 / 4, the continuum's ratio. The slab's run directory and
-the JSON and PNG get `_nu2d` after the other tags; the 2D run is the untagged one, so
-with `--reuse` it is shared. Several psi in one command share one JSON and PNG; a
-later command with the same tags overwrites them.
+The slab scene carries the 2D scene's artificial viscosity and artificial stress, not its
+numbers: at one alpha and epsilon both terms are weaker on a cubic lattice than on a
+square one, so `collapse_saturated_3d` sets alpha = 1.25 and epsilon = 0.814 where the 2D
+scenes set 1.0 and 0.5 (its TOML says why; `tests/test_three_d.py` checks the two against
+this module's ratios). Monaghan's viscosity acts as nu = alpha h c / (2 (d + 2)), so the
+slab's alpha is the 2D scene's times 5 / 4, the continuum's ratio (on the lattice at
+h = 1.2 dx the 3D term is 0.86 as strong for a shear wave and 0.81 for a longitudinal one,
+`bench/diagnostics/av_viscosity_dims.py`). The artificial stress's moment on the lattice
+(bench/tools/lattice_sums.py) is 0.61 as strong on the cubic lattice as on the square one
+at h = 1.2 dx and n = 2.55, so the slab's epsilon is the 2D scene's over that ratio.
 
-`--as-2d` runs the slab at the artificial stress of the 2D scene rather than at its
-epsilon: the term's moment on the lattice (bench/tools/lattice_sums.py) is 0.61 as strong
-on the cubic lattice as on the square one at h = 1.2 dx and n = 2.55, so the slab's
-epsilon is the 2D scene's over that ratio (0.5 -> 0.814). Tag `_as2d`.
+`--alpha` and `--epsilon` set the slab's own (the runs of docs/vv/collapse_saturated_3d.md
+before 2026-12-06, afternoon, were at alpha 1.0 and epsilon 0.5: `--alpha 1 --epsilon
+0.5`; those "at alpha 1.25" at `--epsilon 0.5`). They tag the slab's run directory, JSON
+and PNG `_a<alpha>` and `_e<epsilon>` after the other tags; the 2D run is the untagged
+one, so with `--reuse` it is shared. `--nu-2d` and `--as-2d` set the two to the 2D
+scene's strengths as above; the scene now has them, so they change nothing but the tags
+(`_nu2d`, `_as2d`) and are kept for the commands of the docs. Several psi in one command
+share one JSON and PNG; a later command with the same tags overwrites them.
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
@@ -134,6 +138,8 @@ def main() -> None:
                     help="the slab at the 2D scene's viscosity (alpha x 5/4)")
     ap.add_argument("--as-2d", action="store_true",
                     help="the slab at the 2D scene's artificial stress (epsilon / 0.61)")
+    ap.add_argument("--alpha", type=float, help="the slab's artificial viscosity alpha")
+    ap.add_argument("--epsilon", type=float, help="the slab's artificial stress epsilon")
     args = ap.parse_args()
     common, tag = [], ""
     if args.dx is not None:
@@ -146,13 +152,18 @@ def main() -> None:
     if args.end is not None:
         common.append(f"time.end={args.end}")
         tag += f"_end{args.end:g}"
-    tag3 = tag + ("_nu2d" if args.nu_2d else "") + ("_as2d" if args.as_2d else "")
+    tag3 = tag + ("_nu2d" if args.nu_2d else "") + ("_as2d" if args.as_2d else "") + (
+        f"_a{args.alpha:g}" if args.alpha is not None else "") + (
+        f"_e{args.epsilon:g}" if args.epsilon is not None else "")
     rows = {}
     for psi in args.psi:
         s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
                  args.reuse)
         nu = (nu_2d_settings(psi) if args.nu_2d else []) + (
-            as_2d_settings(psi) if args.as_2d else [])
+            as_2d_settings(psi) if args.as_2d else []) + (
+            [f"stabilisation.av_alpha={args.alpha:g}"] if args.alpha is not None else []) + (
+            [f"stabilisation.artificial_stress={args.epsilon:g}"]
+            if args.epsilon is not None else [])
         s3 = run(RUNS / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
                  plasticity_settings(psi) + common + slab + nu, args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
@@ -172,7 +183,8 @@ def main() -> None:
     name = f"collapse_saturated_3d{tag3}"
     (OUT / f"{name}.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
-         "end": args.end, "nu_2d": args.nu_2d, "as_2d": args.as_2d, "rows": rows}, indent=1) + "\n")
+         "end": args.end, "nu_2d": args.nu_2d, "as_2d": args.as_2d, "alpha": args.alpha,
+         "epsilon": args.epsilon, "rows": rows}, indent=1) + "\n")
     plot(rows, OUT / f"{name}.png", tag3)
     print(f"wrote {OUT / name}.json and .png")
 

@@ -22,6 +22,7 @@ first it is [[1, -1], [a, 1]] / (1+a), |lambda|^2 = 1 / (1+a): stable and damped
 import numba as nb
 import numpy as np
 
+from psph.kernels.free_surface import on_free_surface
 from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.kinematics import inverse_moment_3d
 from psph.kernels.sum_columns import (
@@ -36,7 +37,6 @@ from psph.kernels.sum_columns import (
     GV_YX,
     GV_YY,
     M_XX,
-    M_YY,
     Q_X,
     Q_Y,
     SUM_APSI,
@@ -100,13 +100,13 @@ projection_rhs_3d = make_projection_rhs(3)
 def imposed_increments(n_owned: int, sums: np.ndarray, drained_from: np.ndarray, t: float,
                        drained_surface: bool, p: np.ndarray, out: np.ndarray) -> None:
     """out[i] = (1, -p_i) where p^(n+1) = 0 is imposed (drained from time t on, or a
-    free-surface particle when the surface is drained: trace of M below 1.5 of 2, 2.25
-    of 3 in 3D (sums of the 3D layout, 57 columns), as in `advance`), else (0, 0)."""
-    three = sums.shape[1] == NSUMS_3D
+    free-surface particle when the surface is drained: `free_surface.on_free_surface`,
+    from M in the sums, of the 3D layout (57 columns) in 3D, as in `advance`), else
+    (0, 0)."""
+    dim = 3 if sums.shape[1] == NSUMS_3D else 2
     for i in range(n_owned):
         s = sums[i]
-        trace = s[0] + s[4] + s[8] if three else s[M_XX] + s[M_YY]
-        if drained_from[i] <= t or (drained_surface and trace < (2.25 if three else 1.5)):
+        if drained_from[i] <= t or (drained_surface and on_free_surface(s, M_XX, dim)):
             out[i, 0] = 1.0
             out[i, 1] = -p[i]
         else:

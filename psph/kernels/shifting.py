@@ -27,10 +27,11 @@ to n = 0 at 6.2 s.) The particle's fields (stress, porosity, pressure, plastic s
 displacement) stay with it: the shift is a small fraction of dx per step, an error of the
 order of delta r . grad f.
 
-In 3D (`shift_particles_3d`) the same with the 3D layout of the sums (M: 9 columns, L: 9)
-and the thresholds of a 3D lattice: trace(M) 2.05 on the surface row, 2.90 on the second
-and 2.945 inside at h = 1.2 dx (2.03 / 2.875 / 2.98 at 1.3 dx), so `FREE_TRACE_3D` = 2.25
-(the ponding condition's surface in 3D) and `SURFACE_TRACE_3D` = 2.92. Under a face M has
+In 3D (`shift_particles_3d`) the same with the 3D layout of the sums (M: 9 columns, L: 9).
+The free surface is the ponding condition's (`free_surface.on_free_surface`: M's two
+smallest eigenvalues sum below 1.5). The band below it uses the trace of a 3D lattice:
+2.05 on the surface row, 2.90 on the second and 2.945 inside at h = 1.2 dx (2.03 / 2.875
+/ 2.98 at 1.3 dx), so `SURFACE_TRACE_3D` = 2.92. Under a face M has
 one small eigenvalue, whose eigenvector is the face's normal, and the shift loses its part
 along it; under an edge two, and the shift keeps only its part along the edge (the
 largest eigenvalue's eigenvector); at a corner none is kept.
@@ -40,13 +41,13 @@ import math
 
 import numba as nb
 
+from psph.kernels.free_surface import FREE_SURFACE, eigenvalues_3d, on_free_surface
 from psph.kernels.sum_columns import sum_layout
 
 SHIFT_CAP = 0.05  # the longest shift of one step, in dx
 SURFACE_TRACE = 1.95  # trace(M) below which only the part along the surface is kept
-FREE_TRACE = 1.5  # trace(M) below which a particle is on the free surface: no shift
-SURFACE_TRACE_3D = 2.92  # the same two in 3D (module docstring)
-FREE_TRACE_3D = 2.25
+FREE_TRACE = FREE_SURFACE  # trace(M) below which a particle is on the free surface: no shift
+SURFACE_TRACE_3D = 2.92  # SURFACE_TRACE in 3D (module docstring)
 # M's two smallest eigenvalues closer than this share of its trace: an edge (module
 # docstring). A lattice's row under a face has a gap of 0.040 / 2.90 = 1.4 %; under an
 # edge 0 (0.939, 0.939, 0.978 at h = 1.2 dx); jitter moves them by less than the half
@@ -129,31 +130,10 @@ def _eigenvector_3d(a00, a01, a02, a11, a12, a22, lam):
 
 
 @nb.njit(cache=True)
-def _eigenvalues_3d(a00, a01, a02, a11, a12, a22):
-    """The eigenvalues l1 <= l2 <= l3 of the symmetric 3x3 matrix A (the trigonometric
-    solution of the characteristic cubic)."""
-    q = (a00 + a11 + a22) / 3.0
-    p1 = a01 * a01 + a02 * a02 + a12 * a12
-    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
-    if p2 <= 1e-30 * q * q:
-        return q, q, q
-    pp = math.sqrt(p2 / 6.0)
-    b00, b11, b22 = (a00 - q) / pp, (a11 - q) / pp, (a22 - q) / pp
-    b01, b02, b12 = a01 / pp, a02 / pp, a12 / pp
-    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
-               + b02 * (b01 * b12 - b11 * b02))
-    r = min(1.0, max(-1.0, r))
-    phi = math.acos(r) / 3.0
-    l3 = q + 2.0 * pp * math.cos(phi)
-    l1 = q + 2.0 * pp * math.cos(phi + 2.0 * math.pi / 3.0)
-    return l1, 3.0 * q - l1 - l3, l3
-
-
-@nb.njit(cache=True)
 def _surface_normal_3d(a00, a01, a02, a11, a12, a22):
     """Unit eigenvector of the symmetric 3x3 matrix A for its smallest eigenvalue: the
     direction in which the support is cut; (0, 0, 0) where A is isotropic."""
-    l1, _, l3 = _eigenvalues_3d(a00, a01, a02, a11, a12, a22)
+    l1, _, l3 = eigenvalues_3d(a00, a01, a02, a11, a12, a22)
     if l3 - l1 <= 1e-15 * abs(l3):
         return 0.0, 0.0, 0.0
     return _eigenvector_3d(a00, a01, a02, a11, a12, a22, l1)
@@ -166,7 +146,7 @@ def _along_surface_3d(d0, d1, d2, a00, a01, a02, a11, a12, a22, edge_gap):
     along that eigenvector; along an edge (the two smallest within `edge_gap` of each
     other: cut along both faces' normals) only its part along the largest eigenvector,
     the edge; at a corner or where M is isotropic, nothing."""
-    l1, l2, l3 = _eigenvalues_3d(a00, a01, a02, a11, a12, a22)
+    l1, l2, l3 = eigenvalues_3d(a00, a01, a02, a11, a12, a22)
     if l3 - l1 <= edge_gap:
         return 0.0, 0.0, 0.0
     if l2 - l1 > edge_gap:  # a face
@@ -183,16 +163,16 @@ GV_3D = sum_layout(3).GV
 
 
 @nb.njit(cache=True)
-def shift_particles_3d(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, free_trace, x,
-                       shift):
+def shift_particles_3d(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, x, shift):
     """`shift_particles` in 3D: M_i and L_i from the 3D layout of `sums`
-    (`sum_columns.sum_layout(3)`), grad_c and shift (n, 3)."""
+    (`sum_columns.sum_layout(3)`), grad_c and shift (n, 3); no shift on the free surface
+    of `free_surface.on_free_surface`."""
     cm = M_3D
     cgv = GV_3D
     for i in range(n_owned):
         m = sums[i]
         trace = m[cm] + m[cm + 4] + m[cm + 8]
-        if trace < free_trace:
+        if on_free_surface(m, cm, 3):
             for k in range(3):
                 shift[i, k] = 0.0
             continue

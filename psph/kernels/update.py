@@ -10,6 +10,7 @@ import math
 
 import numba as nb
 
+from psph.kernels.free_surface import on_free_surface
 from psph.kernels.kinematics import inverse_moment_3d, jaumann_elastic_3d, velocity_gradient_3d
 from psph.kernels.plasticity import dp_return, dp_return_3d
 from psph.kernels.sum_columns import (
@@ -240,7 +241,6 @@ def make_advance(dim: int):
     lay = sum_layout(dim)
     cm, cgv, cgs, cgn, cgp, cq = lay.M, lay.GV, lay.GS, lay.GN, lay.GP, lay.Q
     ca, cap_, capsi, cga, cdv = lay.SUM_A, lay.SUM_AP, lay.SUM_APSI, lay.GA, lay.DVDT
-    surface_trace = 0.75 * dim  # the trace of M below which a particle is on the surface
 
     @nb.njit(cache=True, error_model="numpy")
     def advance(n_owned, sums, f, loads, mat, eps_soft, box, par):
@@ -404,11 +404,10 @@ def make_advance(dim: int):
                     p_new = tpi_pressure(b_i, s[ca], s[cap_], p[i], beta, dt)
                     p_prev[i] = p[i]
                     p[i] = p_new
-                trace_m = s[M_XX] + s[M_YY] if dim == 2 else s[cm] + s[cm + 4] + s[cm + 8]
-                if ponding > 0 and trace_m < surface_trace and (p[i] > 0.0 or ponding == 2):
-                    # a free-surface particle (kernel support < 3/4 full: trace of the moment
-                    # matrix of Eq. 22 below 1.5 of 2, 2.25 of 3 in 3D) cannot hold positive
-                    # pore pressure, nor any when drained
+                if ponding > 0 and (p[i] > 0.0 or ponding == 2) and on_free_surface(s, cm, dim):
+                    # a free-surface particle (its kernel support cut: the moment matrix of
+                    # Eq. 22, free_surface.py) cannot hold positive pore pressure, nor any
+                    # when drained
                     p[i] = 0.0
                     if p_prev[i] > 0.0 or ponding == 2:
                         p_prev[i] = 0.0

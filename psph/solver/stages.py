@@ -23,7 +23,6 @@ from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.neighbours import count_owned, gather_sorted
 from psph.kernels.shifting import (
     FREE_TRACE,
-    FREE_TRACE_3D,
     SHIFT_CAP,
     SURFACE_TRACE,
     SURFACE_TRACE_3D,
@@ -275,11 +274,13 @@ class Stages:
         grad_c = self.scratch_shift[:, 0:d]
         symmetric_gradient_sums(st.n_owned, self.n_pairs, self.pairs, self.pair_g, st.vol,
                                 half, grad_c)
-        shift, surface, free = (shift_particles, SURFACE_TRACE, FREE_TRACE) if d == 2 else (
-            shift_particles_3d, SURFACE_TRACE_3D, FREE_TRACE_3D)
-        shift(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
-              SHIFT_CAP * self.scene.particles.dx, surface, free, st.x,
-              self.scratch_shift[:, d:2 * d])
+        cap = SHIFT_CAP * self.scene.particles.dx
+        if d == 2:
+            shift_particles(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt, cap,
+                            SURFACE_TRACE, FREE_TRACE, st.x, self.scratch_shift[:, d:2 * d])
+        else:
+            shift_particles_3d(st.n_owned, grad_c, self.sums, self.shifting, self.h, self.dt,
+                               cap, SURFACE_TRACE_3D, st.x, self.scratch_shift[:, d:2 * d])
 
     def mass_balance_residual(self) -> float:
         """`PressureSolve.residual` of this step (collective)."""

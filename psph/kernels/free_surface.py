@@ -1,0 +1,73 @@
+"""The free surface: where a particle's kernel support is cut, read from the moment matrix
+M = sum_j V_j x_ji (x) grad_i W_ij of Eq. (22), which is the identity where the support is
+full. A particle is on the free surface when, in 2D, trace(M) < FREE_SURFACE = 1.5 (its
+support less than 3/4 full), and in 3D when the sum of M's two smallest eigenvalues is
+below the same 1.5. The ponding and drained conditions hold its pore pressure there
+(`update.make_advance`, `projection.imposed_increments`), and particle shifting leaves it
+where it is (`shifting`).
+
+Why not the trace in 3D as well. Under a plane face M has one small eigenvalue, along the
+face's normal, and dim - 1 larger ones along the face. The trace weighs them 1 : 1 in 2D
+but 1 : 2 in 3D, so the test psph used until 2026-12-06 in 3D (trace < 2.25 = 3/4 of 3)
+read a particle's depth differently from the 2D test. The normal and one tangent (the two
+smallest eigenvalues) read it the same way in both dimensions. On a lattice at h = 1.2 dx
+the two tests agree row by row (a face: 1.281 in 2D, 1.271 in 3D; the row below 1.921 and
+1.920; an edge 0.786 and 0.780; a 3D corner 0.460), as
+`tests/test_free_surface.py` checks.
+
+Where they differ is the slab of `collapse_saturated_3d`, a 3D lattice that carries a
+plane-strain flow. There y is a direction along which nothing changes, and M_yy is M's
+largest eigenvalue wherever the support is cut in the x-z plane. So the two smallest
+eigenvalues are the in-plane ones, and the slab's free surface is the 2D scene's on the
+y-summed kernel. With the trace, the slab's thin toe also counted its cut M_yy (0.62 under
+an edge). That drained particles the 2D scene keeps wet, and it made the slab's suction
+tail at ψ = 2.5° 7.8 % larger than the 2D scene's at dx = 0.08 m
+(docs/vv/collapse_saturated_3d.md, "The drained surface in 3D").
+"""
+
+import math
+
+import numba as nb
+
+FREE_SURFACE = 1.5  # trace(M) in 2D, M's two smallest eigenvalues summed in 3D
+
+
+@nb.njit(cache=True)
+def eigenvalues_3d(a00, a01, a02, a11, a12, a22):
+    """The eigenvalues l1 <= l2 <= l3 of the symmetric 3x3 matrix A (the trigonometric
+    solution of the characteristic cubic)."""
+    q = (a00 + a11 + a22) / 3.0
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
+    if p2 <= 1e-30 * q * q:
+        return q, q, q
+    pp = math.sqrt(p2 / 6.0)
+    b00, b11, b22 = (a00 - q) / pp, (a11 - q) / pp, (a22 - q) / pp
+    b01, b02, b12 = a01 / pp, a02 / pp, a12 / pp
+    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
+               + b02 * (b01 * b12 - b11 * b02))
+    r = min(1.0, max(-1.0, r))
+    phi = math.acos(r) / 3.0
+    l3 = q + 2.0 * pp * math.cos(phi)
+    l1 = q + 2.0 * pp * math.cos(phi + 2.0 * math.pi / 3.0)
+    return l1, 3.0 * q - l1 - l3, l3
+
+
+@nb.njit(cache=True)
+def on_free_surface(m, cm: int, dim: int) -> bool:
+    """Whether the particle whose sums row is `m` (M's dim x dim entries row-major from
+    column `cm`) is on the free surface (module docstring)."""
+    if dim == 2:
+        return m[cm] + m[cm + 3] < FREE_SURFACE
+    a00, a11, a22 = m[cm], m[cm + 4], m[cm + 8]
+    a01 = 0.5 * (m[cm + 1] + m[cm + 3])
+    a02 = 0.5 * (m[cm + 2] + m[cm + 6])
+    a12 = 0.5 * (m[cm + 5] + m[cm + 7])
+    # l1 + l2 = trace - l3, and l3 is at most the largest absolute row sum (Gershgorin):
+    # inside the soil that bound already settles it, without the cubic
+    largest = max(a00 + abs(a01) + abs(a02), abs(a01) + a11 + abs(a12),
+                  abs(a02) + abs(a12) + a22)
+    if a00 + a11 + a22 - largest >= FREE_SURFACE:
+        return False
+    l1, l2, _ = eigenvalues_3d(a00, a01, a02, a11, a12, a22)
+    return l1 + l2 < FREE_SURFACE
