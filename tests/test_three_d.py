@@ -227,7 +227,7 @@ def test_cryer_sphere_mandel_cryer_peak(tmp_path):
     load ramped over 10 ms rather than 2 ms: the ramp's elastic wave is smaller) to
     t = 0.25 s: the centre's pressure rises above p0 and peaks within 5 % of the series'
     peak and 10 % of its time (issue 37). At dx = 0.1 m the peak comes 22 % early: the 3D
-    free-surface test (kernels/free_surface.py) drains 127 of the 528 particles, down to
+    free-surface test (kernels/free_surface.py) drains 121 of the 528 particles, down to
     0.79 dx inside the sphere's surface, where the trace test before 2026-12-06 drained
     112, down to 0.69 dx (docs/vv/cryer.md)."""
     scene = load_scene("cryer", ["time.end=0.25", "loads.0.ramp=0.01"])

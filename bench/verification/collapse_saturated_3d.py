@@ -13,22 +13,22 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
 The slab scene carries the 2D scene's artificial viscosity and artificial stress, not its
 numbers: at one alpha and epsilon both terms are weaker on a cubic lattice than on a
 square one, so `collapse_saturated_3d` sets alpha = 1.25 and epsilon = 0.814 where the 2D
-scenes set 1.0 and 0.5 (its TOML says why; `tests/test_three_d.py` checks the two against
-this module's ratios). Monaghan's viscosity acts as nu = alpha h c / (2 (d + 2)), so the
-slab's alpha is the 2D scene's times 5 / 4, the continuum's ratio (on the lattice at
-h = 1.2 dx the 3D term is 0.86 as strong for a shear wave and 0.81 for a longitudinal one,
+scenes set 1.0 and 0.5 (its TOML says why;
+`tests/test_kernels_3d.py::test_the_slab_scene_carries_the_2d_scenes_stabilisation_strengths`
+checks the two). Monaghan's viscosity acts as nu = alpha h c / (2 (d + 2)), so the slab's
+alpha is the 2D scene's times 5 / 4, the continuum's ratio (on the lattice at h = 1.2 dx
+the 3D term is 0.86 as strong for a shear wave and 0.81 for a longitudinal one,
 `bench/diagnostics/av_viscosity_dims.py`). The artificial stress's moment on the lattice
-(bench/tools/lattice_sums.py) is 0.61 as strong on the cubic lattice as on the square one
+(bench/tools/lattice_sums.py) is 0.614 as strong on the cubic lattice as on the square one
 at h = 1.2 dx and n = 2.55, so the slab's epsilon is the 2D scene's over that ratio.
 
-`--alpha` and `--epsilon` set the slab's own (the runs of docs/vv/collapse_saturated_3d.md
-before 2026-12-06, afternoon, were at alpha 1.0 and epsilon 0.5: `--alpha 1 --epsilon
-0.5`; those "at alpha 1.25" at `--epsilon 0.5`). They tag the slab's run directory, JSON
-and PNG `_a<alpha>` and `_e<epsilon>` after the other tags; the 2D run is the untagged
-one, so with `--reuse` it is shared. `--nu-2d` and `--as-2d` set the two to the 2D
-scene's strengths as above; the scene now has them, so they change nothing but the tags
-(`_nu2d`, `_as2d`) and are kept for the commands of the docs. Several psi in one command
-share one JSON and PNG; a later command with the same tags overwrites them.
+`--alpha` and `--epsilon` set the slab's own. The runs of docs/vv/collapse_saturated_3d.md
+made before 2026-12-06, afternoon, were at alpha 1.0 and epsilon 0.5 (`--alpha 1
+--epsilon 0.5`), those "at alpha 1.25" or `--nu-2d` at `--epsilon 0.5`, and those with
+`--nu-2d --as-2d` at the scene's values (no flag). The two flags tag the slab's run
+directory, JSON and PNG `_a<alpha>` and `_e<epsilon>` after the other tags; the 2D run is
+the untagged one, so with `--reuse` it is shared. Several psi in one command share one
+JSON and PNG; a later command with the same tags overwrites them.
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d
@@ -53,16 +53,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench" / "tools"))
-from lattice_sums import artificial_stress_3d_over_2d  # noqa: E402
 from scene_runs import run_scene  # noqa: E402
-
-from psph.config.load import load_scene  # noqa: E402
 
 OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "collapse_saturated_3d"
 PSIS = ("-5", "0", "2.5")
 BAR = 0.05
-ALPHA_3D_OVER_2D = (3 + 2) / (2 + 2)  # one nu = alpha h c / (2 (d + 2)) in both
 
 
 def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
@@ -75,22 +71,6 @@ def plasticity_settings(psi: str) -> list[str]:
     path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
     plasticity = tomllib.loads(path.read_text())["material"]["plasticity"]
     return [f"material.plasticity.{k}={v}" for k, v in plasticity.items()]
-
-
-def nu_2d_settings(psi: str) -> list[str]:
-    """The slab's artificial viscosity set to the 2D scene's nu (`--nu-2d`)."""
-    path = ROOT / "psph" / "scenes" / f"collapse_saturated_psi{psi}.toml"
-    alpha = tomllib.loads(path.read_text())["stabilisation"]["av_alpha"]
-    return [f"stabilisation.av_alpha={alpha * ALPHA_3D_OVER_2D:g}"]
-
-
-def as_2d_settings(psi: str) -> list[str]:
-    """The slab's artificial stress set to the 2D scene's strength on the lattice
-    (`--as-2d`)."""
-    scene = load_scene(f"collapse_saturated_psi{psi}")
-    st = scene.stabilisation
-    ratio = artificial_stress_3d_over_2d(scene.particles.h_factor, st.artificial_stress_n)
-    return [f"stabilisation.artificial_stress={st.artificial_stress / ratio:.3f}"]
 
 
 def numbers(s: dict) -> dict:
@@ -134,10 +114,6 @@ def main() -> None:
     ap.add_argument("--reuse", action="store_true", help="keep finished runs")
     ap.add_argument("--dx", type=float, help="particle spacing of both runs (scene: 0.04 m)")
     ap.add_argument("--end", type=float, help="end time of both runs (scene: 1.2 s)")
-    ap.add_argument("--nu-2d", action="store_true",
-                    help="the slab at the 2D scene's viscosity (alpha x 5/4)")
-    ap.add_argument("--as-2d", action="store_true",
-                    help="the slab at the 2D scene's artificial stress (epsilon / 0.61)")
     ap.add_argument("--alpha", type=float, help="the slab's artificial viscosity alpha")
     ap.add_argument("--epsilon", type=float, help="the slab's artificial stress epsilon")
     args = ap.parse_args()
@@ -152,16 +128,13 @@ def main() -> None:
     if args.end is not None:
         common.append(f"time.end={args.end}")
         tag += f"_end{args.end:g}"
-    tag3 = tag + ("_nu2d" if args.nu_2d else "") + ("_as2d" if args.as_2d else "") + (
-        f"_a{args.alpha:g}" if args.alpha is not None else "") + (
+    tag3 = tag + (f"_a{args.alpha:g}" if args.alpha is not None else "") + (
         f"_e{args.epsilon:g}" if args.epsilon is not None else "")
     rows = {}
     for psi in args.psi:
         s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
                  args.reuse)
-        nu = (nu_2d_settings(psi) if args.nu_2d else []) + (
-            as_2d_settings(psi) if args.as_2d else []) + (
-            [f"stabilisation.av_alpha={args.alpha:g}"] if args.alpha is not None else []) + (
+        nu = ([f"stabilisation.av_alpha={args.alpha:g}"] if args.alpha is not None else []) + (
             [f"stabilisation.artificial_stress={args.epsilon:g}"]
             if args.epsilon is not None else [])
         s3 = run(RUNS / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
@@ -183,7 +156,7 @@ def main() -> None:
     name = f"collapse_saturated_3d{tag3}"
     (OUT / f"{name}.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
-         "end": args.end, "nu_2d": args.nu_2d, "as_2d": args.as_2d, "alpha": args.alpha,
+         "end": args.end, "alpha": args.alpha,
          "epsilon": args.epsilon, "rows": rows}, indent=1) + "\n")
     plot(rows, OUT / f"{name}.png", tag3)
     print(f"wrote {OUT / name}.json and .png")

@@ -1,27 +1,25 @@
 """The free surface: where a particle's kernel support is cut, read from the moment matrix
 M = sum_j V_j x_ji (x) grad_i W_ij of Eq. (22), which is the identity where the support is
 full. A particle is on the free surface when, in 2D, trace(M) < FREE_SURFACE = 1.5 (its
-support less than 3/4 full), and in 3D when the sum of M's two smallest eigenvalues is
-below the same 1.5. The ponding and drained conditions hold its pore pressure there
-(`update.make_advance`, `projection.imposed_increments`), and particle shifting leaves it
-where it is (`shifting`).
+support less than 3/4 full), and in 3D when M's smallest eigenvalue plus the mean of the
+other two is below the same 1.5. The ponding and drained conditions hold its pore
+pressure there (`update.make_advance`, `projection.imposed_increments`), and particle
+shifting leaves it where it is (`shifting`).
 
 Why not the trace in 3D as well. Under a plane face M has one small eigenvalue, along the
-face's normal, and dim - 1 larger ones along the face. The trace weighs them 1 : 1 in 2D
-but 1 : 2 in 3D, so the test psph used until 2026-12-06 in 3D (trace < 2.25 = 3/4 of 3)
-read a particle's depth differently from the 2D test. The normal and one tangent (the two
-smallest eigenvalues) read it the same way in both dimensions. On a lattice at h = 1.2 dx
-the two tests agree row by row (a face: 1.281 in 2D, 1.271 in 3D; the row below 1.921 and
-1.920; an edge 0.786 and 0.780; a 3D corner 0.460), as
-`tests/test_free_surface.py` checks.
+face's normal, and dim - 1 larger ones along the face. The 2D trace is the normal's plus
+the tangent's. The 3D trace adds a second tangent, so the test psph used until
+2026-12-06 in 3D (trace < 2.25, 3/4 of 3) gave the tangents twice the normal's weight,
+and a tangent that is fuller or emptier than a lattice's (a compressed toe, a thin
+sheet) moved it. The normal plus the tangents' mean, (trace + l1) / 2, weighs them as the
+2D trace does. On a lattice at h = 1.2 dx it agrees with the 2D test row by row: a face
+1.281 in 2D and 1.271 in 3D, the row below 1.921 and 1.921, an edge 0.786 and 0.845,
+a 3D corner 0.579 (`tests/test_kernels_3d.py -k free_surface`).
 
-Where they differ is the slab of `collapse_saturated_3d`, a 3D lattice that carries a
-plane-strain flow. There y is a direction along which nothing changes, and M_yy is M's
-largest eigenvalue wherever the support is cut in the x-z plane. So the two smallest
-eigenvalues are the in-plane ones, and the slab's free surface is the 2D scene's on the
-y-summed kernel. With the trace, the slab's thin toe also counted its cut M_yy (0.62 under
-an edge). That drained particles the 2D scene keeps wet, and it made the slab's suction
-tail at ψ = 2.5° 7.8 % larger than the 2D scene's at dx = 0.08 m
+The smallest eigenvalue is the normal's on a face. Under an edge or at a corner the
+normal is not one direction, but there every test flags the particle by a wide margin.
+The two smallest eigenvalues summed (tried on 2026-12-06) are the normal and the
+emptier tangent: they flagged more of a compressed toe than the 2D test does
 (docs/vv/collapse_saturated_3d.md, "The drained surface in 3D").
 """
 
@@ -29,7 +27,7 @@ import math
 
 import numba as nb
 
-FREE_SURFACE = 1.5  # trace(M) in 2D, M's two smallest eigenvalues summed in 3D
+FREE_SURFACE = 1.5  # trace(M) in 2D, (trace(M) + its smallest eigenvalue) / 2 in 3D
 
 
 @nb.njit(cache=True)
@@ -63,11 +61,12 @@ def on_free_surface(m, cm: int, dim: int) -> bool:
     a01 = 0.5 * (m[cm + 1] + m[cm + 3])
     a02 = 0.5 * (m[cm + 2] + m[cm + 6])
     a12 = 0.5 * (m[cm + 5] + m[cm + 7])
-    # l1 + l2 = trace - l3, and l3 is at most the largest absolute row sum (Gershgorin):
+    trace = a00 + a11 + a22
+    # l1 is at least the smallest diagonal less its row's off-diagonals (Gershgorin):
     # inside the soil that bound already settles it, without the cubic
-    largest = max(a00 + abs(a01) + abs(a02), abs(a01) + a11 + abs(a12),
-                  abs(a02) + abs(a12) + a22)
-    if a00 + a11 + a22 - largest >= FREE_SURFACE:
+    least = min(a00 - abs(a01) - abs(a02), a11 - abs(a01) - abs(a12),
+                a22 - abs(a02) - abs(a12))
+    if 0.5 * (trace + least) >= FREE_SURFACE:
         return False
-    l1, l2, _ = eigenvalues_3d(a00, a01, a02, a11, a12, a22)
-    return l1 + l2 < FREE_SURFACE
+    l1, _, _ = eigenvalues_3d(a00, a01, a02, a11, a12, a22)
+    return 0.5 * (trace + l1) < FREE_SURFACE
