@@ -28,8 +28,9 @@ displacement) stay with it: the shift is a small fraction of dx per step, an err
 order of delta r . grad f.
 
 In 3D (`shift_particles_3d`) the same with the 3D layout of the sums (M: 9 columns, L: 9).
-The free surface is the ponding condition's (`free_surface.on_free_surface`: M's two
-smallest eigenvalues sum below 1.5). The band below it uses the trace of a 3D lattice:
+The free surface is the ponding condition's (`free_surface.on_free_surface`: M's trace
+plus its smallest eigenvalue, halved, below 1.5). The band below it uses the trace of a
+3D lattice:
 2.05 on the surface row, 2.90 on the second and 2.945 inside at h = 1.2 dx (2.03 / 2.875
 / 2.98 at 1.3 dx), so `SURFACE_TRACE_3D` = 2.92. Under a face M has
 one small eigenvalue, whose eigenvector is the face's normal, and the shift loses its part
