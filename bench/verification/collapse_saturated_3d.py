@@ -134,11 +134,11 @@ def main() -> None:
     for psi in args.psi:
         s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
                  args.reuse)
-        nu = ([f"stabilisation.av_alpha={args.alpha:g}"] if args.alpha is not None else []) + (
+        stab = ([f"stabilisation.av_alpha={args.alpha:g}"] if args.alpha is not None else []) + (
             [f"stabilisation.artificial_stress={args.epsilon:g}"]
             if args.epsilon is not None else [])
         s3 = run(RUNS / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
-                 plasticity_settings(psi) + common + slab + nu, args.reuse)
+                 plasticity_settings(psi) + common + slab + stab, args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
         rows[psi] = {"2d": r2, "3d": r3,
                      "runout_rel": r3["runout_m"] / r2["runout_m"] - 1.0,
