@@ -106,6 +106,7 @@ def imposed_increments(n_owned: int, sums: np.ndarray, drained_from: np.ndarray,
     dim = 3 if sums.shape[1] == NSUMS_3D else 2
     for i in range(n_owned):
         s = sums[i]
+        # M starts at column M_XX = 0 in the 2D and the 3D layout alike
         if drained_from[i] <= t or (drained_surface and on_free_surface(s, M_XX, dim)):
             out[i, 0] = 1.0
             out[i, 1] = -p[i]
