@@ -4,13 +4,13 @@ soil's strength, not a numerical drag, and sliding itself makes no basal suction
 The block: 24 x 8 particles of the Section 4.5 clay (dx = 0.4 m, c = 5 kPa, phi = 10 deg,
 psi = 0, no softening), hydrostatic p and K0 = 0.5, explicit Eq. (25) at dt = 4e-4 s with
 the symplectic step, alpha_Pi = 1 and artificial stress 0.5 as in the retrogressive scenes
-(`psph/app/sliding.py`; the table of variants: `python -m psph.app.sliding`).
+(`bench/studies/sliding.py`, which prints the table of variants).
 """
 
 import numpy as np
 import pytest
 
-from psph.app.sliding import sliding_block, summarise
+from bench.studies.sliding import sliding_block, summarise
 
 
 @pytest.fixture(scope="module")

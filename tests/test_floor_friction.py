@@ -1,13 +1,12 @@
 """The friction surface's Coulomb law in a run (issue 37): a block sliding on
 `collapse_3d`'s floor decelerates at g tan(phi_b), its weight's friction counted once
-(`psph.app.floor_friction`; the table over thicknesses and rules:
-`bench/diagnostics/surface_floor_sliding.py`)."""
+(`bench/studies/floor_friction.py`, which prints the table over thicknesses and rules)."""
 
 import math
 
 import pytest
 
-from psph.app.floor_friction import PHI_B, block_deceleration
+from bench.studies.floor_friction import PHI_B, block_deceleration
 
 
 @pytest.mark.parametrize("rows", [2, 4])

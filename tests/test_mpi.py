@@ -181,7 +181,7 @@ def test_gravity_loading_and_stress_regularisation_one_vs_two_ranks_bitwise(
     move and shift)."""
     from mpi4py import MPI
 
-    from psph.app.sliding import block_scene
+    from bench.studies.sliding import block_scene
 
     comm = MPI.COMM_WORLD
     out = shared_tmp(comm, tmp_path_factory)

@@ -1,6 +1,6 @@
 """Regularised softening (issue 17, item 1; psph/kernels/nonlocal_strain.py): the
 non-local average of eps_p reproduces constant and linear fields away from boundaries,
-and the one-dimensional softening band (psph/verify/softening_band.py) dissipates the same
+and the one-dimensional softening band (bench/studies/softening_band.py) dissipates the same
 energy per unit band area at two spacings with it, not without it."""
 
 import subprocess
@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
+from bench.studies.softening_band import softening_band
 from psph.verify.nonlocal_average import nonlocal_strains
-from psph.verify.softening_band import softening_band
 from tests.helpers import assert_bad_input
 
 DX = 0.1
@@ -78,7 +78,7 @@ def test_average_spreads_a_peak_and_keeps_other_materials_local():
 
 
 def test_softening_band_energy_is_objective_with_regularisation_only():
-    """The 1D shear band of psph/verify/softening_band.py (layer H = 0.3 m, c_p = 20 kPa
+    """The 1D shear band of bench/studies/softening_band.py (layer H = 0.3 m, c_p = 20 kPa
     softening to 0 at eta = 20, phi = psi = 0, top slip 25 mm at 0.05 m/s), dissipated
     plastic work per unit band area G_d at dy = 0.01 and 0.01 / 1.5 m (measured):
 
@@ -159,7 +159,7 @@ def test_a_band_on_a_wall_softens_with_the_images():
 
 
 def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_with_m_1():
-    """The slope's basal band in seconds (bench/diagnostics/nonlocal_sliding.py):
+    """The slope's basal band in seconds (bench/studies/nonlocal_sliding.py):
     a 9.6 x 4.8 m block
     of the Section 4.5 clay (c 55 -> 0.7 kPa, eta = 5) slides at 10 m/s on a fixed base,
     l_c = 1.2 m at dx = 0.6 and 0.4 m (l_c / dx = 2 and 3). The fixed base's ghosts put
@@ -176,7 +176,7 @@ def test_a_block_sliding_on_a_fixed_base_softens_its_base_the_same_at_two_dx_wit
     The traction is the bottom row's strength at its eps_hat (within 4-15 % with m = 1
     and m = 2): the base slides at the strength the average gives it.
     """
-    from psph.app.sliding import SLOPE_SOFTENING, sliding_block
+    from bench.studies.sliding import SLOPE_SOFTENING, sliding_block
 
     reg = "material.plasticity.regularisation={kind='nonlocal', length=1.2, m=1.0}"
     traction = {}

@@ -19,7 +19,7 @@ approaching particles, not on p.
 import numpy as np
 import pytest
 
-from psph.app.sliding import block_scene
+from bench.studies.sliding import block_scene
 
 STEPS = 100
 

@@ -1,4 +1,4 @@
-"""Write the elevation grids of the built-in `slope_3d` scene (issue 38) into psph/scenes:
+"""Write the elevation grids of the built-in `slope_3d` scene into psph/scenes:
 
 - `slope_3d_ground.asc`: a synthetic valley side, the Section 4.5 profile (a 20 m high
   clay slope at 27 degrees, crest at x = 140.749 m, toe at x = 180 m, the polygon of
@@ -9,9 +9,11 @@
 
 The river's cut of the toe is the scene's `[[remove]]` polygon, not the grid.
 
-    python bench/tools/slope_3d_grids.py
+    python bench/tools/slope_3d_grids.py                  # into psph/scenes (seconds)
+    python bench/tools/slope_3d_grids.py --out DIR        # elsewhere, to compare
 """
 
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -37,12 +39,17 @@ def write_asc(path: Path, z: np.ndarray, dx: float, dy: float) -> None:
     path.write_text("\n".join(head + rows) + "\n")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", type=Path, default=SCENES,
+                    help="directory of the two .asc files (default psph/scenes)")
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
     x = np.arange(0.0, LENGTH + CELL / 2, CELL)
     y = np.arange(0.0, HALF_WIDTH + CELL / 2, CELL)
-    write_asc(SCENES / "slope_3d_ground.asc", np.tile(ground(x), (len(y), 1)), CELL, CELL)
-    write_asc(SCENES / "slope_3d_base.asc", np.zeros((2, 2)), LENGTH, HALF_WIDTH)
-    print(f"wrote {SCENES / 'slope_3d_ground.asc'} and slope_3d_base.asc "
+    write_asc(args.out / "slope_3d_ground.asc", np.tile(ground(x), (len(y), 1)), CELL, CELL)
+    write_asc(args.out / "slope_3d_base.asc", np.zeros((2, 2)), LENGTH, HALF_WIDTH)
+    print(f"wrote {args.out / 'slope_3d_ground.asc'} and slope_3d_base.asc "
           f"({len(x)} x {len(y)} nodes)")
 
 

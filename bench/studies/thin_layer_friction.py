@@ -1,17 +1,19 @@
-"""Thin layers on a fixed floor (issue 37, collapse_3d's runaway layer): a dry
+"""Thin layers on a fixed floor (collapse_3d's runaway layer): a dry
 Drucker-Prager layer of n rows (phi = 30 degrees, c = 100 Pa, psi = 0), 4 m long, on a fixed floor
 under gravity tilted by theta (an inclined floor), a slip wall upslope and a free toe.
 Below theta = phi a layer should stay (the wall's shear stress bounded by c + sigma_n
 tan(phi) holds it); the bench prints the mean downslope speed of the layer's middle
 (x from 1 to 3 m) after 0.5 s for each thickness and tilt.
 
-    .venv/bin/python bench/diagnostics/thin_layer_friction.py      # ~3 min, one rank
-    .venv/bin/python bench/diagnostics/thin_layer_friction.py --probe  # the bottom row's
-        # stresses against time at 15 degrees, 1 and 8 rows (~1 min)
+    python bench/studies/thin_layer_friction.py           # ~3 min, one rank
+    python bench/studies/thin_layer_friction.py --probe   # the bottom row's stresses
+        # against time at 15 degrees, 1 and 8 rows (~1 min)
+    python bench/studies/thin_layer_friction.py --quick   # one row at 15 degrees to 0.05 s
 
-Writes bench/out/thin_layer_friction.json and .png.
+Writes <out>/thin_layer_friction.json and .png.
 """
 
+import argparse
 import json
 import math
 import platform
@@ -21,8 +23,8 @@ from datetime import date
 from pathlib import Path
 
 import numpy as np
+from floor_friction import DRY_SAND
 
-from psph.app.floor_friction import DRY_SAND
 from psph.app.run import run
 from psph.config.load import resolve, validate
 from psph.io.snapshots import read_snapshots
@@ -91,17 +93,30 @@ def probe() -> None:
                       f"{st.v[:n][mid, 0].mean():9.4f}")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--probe", action="store_true",
+                    help="the bottom row's stresses against time instead of the table")
+    ap.add_argument("--quick", action="store_true",
+                    help="one row at 15 degrees to 0.05 s (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of thin_layer_friction.json and .png (default bench/out)")
+    args = ap.parse_args(argv)
+    if args.probe:
+        probe()
+        return
+    tilts, thicknesses, end = ((15.0,), (1,), 0.05) if args.quick else \
+        ((0.0, 15.0, 25.0), (1, 2, 4, 8), 0.5)
     rows_out = []
-    work = Path(tempfile.mkdtemp(prefix="psph-thin-"))
-    for theta in (0.0, 15.0, 25.0):
-        for rows in (1, 2, 4, 8):
+    work = tempfile.TemporaryDirectory(prefix="psph-thin-")
+    for theta in tilts:
+        for rows in thicknesses:
             g = 9.81
             text = SCENE.format(gx=g * math.sin(math.radians(theta)),
                                 gz=-g * math.cos(math.radians(theta)), dx=DX, h=rows * DX,
-                                c=100.0, end=0.5)
+                                c=100.0, end=end)
             scene = resolve(validate(tomllib.loads(text)))
-            out = work / f"t{theta:g}_r{rows}"
+            out = Path(work.name) / f"t{theta:g}_r{rows}"
             run(scene, out, quiet=True)
             last = read_snapshots(out / "particles.h5")[-1]
             x0 = last["x"][:, 0] - last["u"][:, 0]
@@ -112,8 +127,9 @@ def main() -> None:
                              "time_s": last["time"]})
             print(f"theta {theta:4.1f} deg, {rows} rows: mean downslope v {u:9.4f} m/s "
                   f"(at rest expected: theta < phi = 30)")
-    OUT.mkdir(exist_ok=True)
-    (OUT / "thin_layer_friction.json").write_text(json.dumps(
+    work.cleanup()
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "thin_layer_friction.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows_out},
         indent=1))
     import matplotlib
@@ -130,10 +146,8 @@ def main() -> None:
            title="a layer on a fixed floor, phi = 30 deg, c = 100 Pa")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(OUT / "thin_layer_friction.png", dpi=110)
+    fig.savefig(args.out / "thin_layer_friction.png", dpi=110)
 
 
 if __name__ == "__main__":
-    import sys
-
-    probe() if "--probe" in sys.argv else main()
+    main()

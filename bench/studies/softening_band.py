@@ -1,5 +1,5 @@
 """A one-dimensional softening shear band: the energy it dissipates at two particle
-spacings, with and without the non-local regularisation (issue 17, item 1).
+spacings, with and without the non-local regularisation.
 
 A layer 0 <= y <= H in simple shear (plane strain): the bottom is fixed, the top moves
 along x at a constant speed. The layer's particles sit at y_k = (k + 1/2) dy; each carries
@@ -24,12 +24,19 @@ sigma : d eps_p with d eps_p = d_lambda dg/dsigma of Eq. (15), d_lambda of Eq. (
 Local: the band is one particle row and G_d follows dy. Non-local: G_d is a material
 property (set by l_c).
 
-    python -m psph.verify.softening_band      # the table of the README
+    python bench/studies/softening_band.py            # the table (local and three l_c, m)
+    python bench/studies/softening_band.py --quick    # the local law at the coarser dy
+
+Prints the table, writes <out>/softening_band.json. `tests/test_regularisation.py` checks
+that G_d is objective with the regularisation only.
 """
 
+import argparse
+import json
 import math
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
 
 import numba as nb
 import numpy as np
@@ -146,13 +153,24 @@ def softening_band(dy: float, length: float = 0.0, weight: float = 2.0,
 
 
 def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="the local law at dy = 0.01 m only")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "out",
+                    help="directory of softening_band.json (default bench/out)")
+    args = ap.parse_args(argv)
+    laws = ((0.0, 1.0),) if args.quick else ((0.0, 1.0), (0.03, 1.0), (0.03, 2.0), (0.06, 2.0))
+    spacings = (0.01,) if args.quick else (0.01, 0.01 / 1.5)
     print(f"{'l_c (m)':>8s} {'m':>4s} {'dy (m)':>8s} {'G_d (J/m2)':>11s} {'band (m)':>9s}"
           f" {'peak tau':>9s} {'end tau':>8s}")
-    for length, weight in ((0.0, 1.0), (0.03, 1.0), (0.03, 2.0), (0.06, 2.0)):
-        for dy in (0.01, 0.01 / 1.5):
+    rows = []
+    for length, weight in laws:
+        for dy in spacings:
             r = softening_band(dy, length, weight)
+            rows.append({"l_c": length, "m": weight, "dy": dy, **asdict(r)})
             print(f"{length:8.3f} {weight:4.1f} {dy:8.4f} {r.dissipated:11.2f}"
                   f" {r.band_width:9.4f} {r.peak_tau:9.0f} {r.final_tau:8.0f}")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "softening_band.json").write_text(json.dumps(rows, indent=1))
     return 0
 
 

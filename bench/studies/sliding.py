@@ -1,4 +1,4 @@
-"""Basal sliding of a saturated block (issue 13): how much shear traction a fixed base
+"""Basal sliding of a saturated block: how much shear traction a fixed base
 transmits, and what pore pressure it makes, against the soil's own strength.
 
 A block of saturated soil rests on the domain's bottom wall with hydrostatic p and the K0
@@ -12,13 +12,20 @@ numerical drag; on a `slip` base it must be zero. The basal row's excess pore pr
 p - p(t = 0) shows any spurious suction the wall makes.
 
 `sliding_block` builds the scene (any overrides apply), runs it on one rank and returns
-the time series; `python -m psph.app.sliding` prints the variants of the README. The
-basal strength it is compared with is `psph.verify.sliding.basal_strength`.
+the time series (`tests/test_basal_sliding.py` runs it; `block_scene` is the scene other
+tests use too). The basal strength it is compared with is
+`psph.verify.sliding.basal_strength`.
+
+    python bench/studies/sliding.py            # the table of the variants (~2 min)
+    python bench/studies/sliding.py --quick    # the scene's settings alone, 30 steps
+
+Prints the table, writes <out>/sliding.json (each variant's window means).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 from pathlib import Path
@@ -33,7 +40,7 @@ from psph.verify.sliding import basal_strength
 
 BLOCK = """
 name = "sliding_block"
-description = "a saturated block sliding on the base (issue 13, basal sliding)"
+description = "a saturated block sliding on the base (basal sliding)"
 gravity = [0.0, -9.81]
 [domain]
 min = [0.0, 0.0]
@@ -73,7 +80,7 @@ av_alpha = 1.0
 """
 
 # the retrogressive slopes' clay softening (Section 4.5: c 55 -> 0.7 kPa, phi 10 -> 5 deg,
-# eta = 5) as overrides of BLOCK: the block of bench/diagnostics/nonlocal_sliding.py and its test
+# eta = 5) as overrides of BLOCK: the block of nonlocal_sliding.py and its test
 SLOPE_SOFTENING = ["material.plasticity.c=55.0e3", "material.plasticity.c_r=0.7e3",
                    "material.plasticity.phi_r=5.0", "material.plasticity.eta=5.0"]
 
@@ -169,21 +176,31 @@ def summarise(result: dict, window: tuple[float, float] = (0.04, 0.12)) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m psph.app.sliding", description=__doc__
-                                 .split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--set", action="append", default=[], help="extra scene override")
+    ap.add_argument("--quick", action="store_true",
+                    help="the scene's settings alone, 30 steps (a smoke check)")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "out",
+                    help="directory of sliding.json (default bench/out)")
     args = ap.parse_args(argv)
-    print(f"{'variant':44s} {'v(0.12s)':>9s} {'traction':>9s} {'strength':>9s} "
+    variants = dict(list(VARIANTS.items())[:1]) if args.quick else VARIANTS
+    steps, every, window = (30, 1, (0.004, 0.012)) if args.quick else (args.steps, 10,
+                                                                       (0.04, 0.12))
+    print(f"{'variant':44s} {'v(end)':>9s} {'traction':>9s} {'strength':>9s} "
           f"{'base dp':>9s} {'base p5':>9s} {'min dp':>9s}   (kPa, m/s)")
-    for name, ov in VARIANTS.items():
-        s = summarise(sliding_block(ov + args.set, steps=args.steps))
+    table = {}
+    for name, ov in variants.items():
+        s = summarise(sliding_block(ov + args.set, steps=steps, every=every), window)
+        table[name] = s
         if "failed" in s:
             print(f"{name:44s} failed: {s['failed']}")
             continue
         print(f"{name:44s} {s['v_end']:9.3f} {s['traction_Pa'] / 1e3:9.2f} "
               f"{s['strength_Pa'] / 1e3:9.2f} {s['base_excess_mean_Pa'] / 1e3:9.1f} "
               f"{s['base_excess_p05_Pa'] / 1e3:9.1f} {s['excess_min_Pa'] / 1e3:9.1f}")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "sliding.json").write_text(json.dumps(table, indent=1))
     return 0
 
 

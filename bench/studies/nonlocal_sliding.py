@@ -1,6 +1,6 @@
-"""The wall band of the non-local softening in a run (issue 17): a saturated block of the
+"""The wall band of the non-local softening in a run: a saturated block of the
 Section 4.5 clay, with its softening (c 55 -> 0.7 kPa, phi 10 -> 5 deg, eta = 5; psi = 0),
-slides at 10 m/s on a fixed base (`psph.app.sliding`), at two spacings with the same
+slides at 10 m/s on a fixed base (`sliding.py`), at two spacings with the same
 internal length l_c, the block the same size at both (9.6 m x 4.8 m). The base softens
 only if the bottom row's eps_hat grows: this is the slope's basal band in a run of
 seconds instead of an hour.
@@ -10,10 +10,12 @@ basal traction from its momentum balance over the last 0.04 s, the bottom row's 
 Drucker-Prager strength, eps_p and eps_hat (the softening variable the return mapping
 used).
 
-    python bench/diagnostics/nonlocal_sliding.py     # the table (about 15 s, one core)
+    python bench/studies/nonlocal_sliding.py            # the table (about 15 s, one core)
+    python bench/studies/nonlocal_sliding.py --quick    # the non-local m = 2 case at
+                                                        # dx = 0.6 m, 100 steps
 
 Cases: the local law, and the non-local one with m = 2 (the default, over-non-local)
-and m = 1 (the plain average). Writes bench/out/nonlocal_sliding.json and .png (basal
+and m = 1 (the plain average). Writes <out>/nonlocal_sliding.json and .png (basal
 traction and the bottom row's eps_hat against time).
 """
 
@@ -22,7 +24,8 @@ import json
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+from sliding import SLOPE_SOFTENING, sliding_block
+
 OUT = Path(__file__).resolve().parents[1] / "out"
 
 HEIGHT, LENGTH = 4.8, 9.6
@@ -30,8 +33,6 @@ HEIGHT, LENGTH = 4.8, 9.6
 
 def case(dx: float, length: float, m: float, steps: int = 1000, every: int = 100) -> dict:
     """One block: `length` = l_c (0: local law) at spacing dx (`sliding_block`'s rows)."""
-    from psph.app.sliding import SLOPE_SOFTENING, sliding_block
-
     over = list(SLOPE_SOFTENING)
     if length > 0.0:
         over.append("material.plasticity.regularisation="
@@ -70,13 +71,21 @@ def plot(cases: list[dict], path: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--length", type=float, default=1.2, help="l_c (m)")
+    ap.add_argument("--quick", action="store_true",
+                    help="the non-local m = 2 case at dx = 0.6 m, 100 steps (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of nonlocal_sliding.json and .png (default bench/out)")
     args = ap.parse_args(argv)
+    spacings = (0.6,) if args.quick else (0.6, 0.4)
+    laws = ((args.length, 2.0),) if args.quick else ((0.0, 1.0), (args.length, 2.0),
+                                                      (args.length, 1.0))
+    steps, every = (100, 20) if args.quick else (1000, 100)
     out = []
     print(f"{'law':>10} {'dx':>5} {'l_c/dx':>6} {'t':>5} {'v':>6} {'traction':>9} "
           f"{'strength':>9} {'base eps_p':>10} {'base eps_hat':>12}")
-    for dx in (0.6, 0.4):
-        for length, m in ((0.0, 1.0), (args.length, 2.0), (args.length, 1.0)):
-            c = case(dx, length, m)
+    for dx in spacings:
+        for length, m in laws:
+            c = case(dx, length, m, steps, every)
             out.append(c)
             law = "local" if length == 0.0 else f"m = {m:g}"
             for r in c["rows"]:
@@ -87,11 +96,11 @@ def main(argv: list[str] | None = None) -> int:
                       f"{r['v_mean']:6.2f} {r['traction_Pa'] / 1e3:7.1f}kPa "
                       f"{r['strength_Pa'] / 1e3:7.1f}kPa "
                       f"{r['base_eps_p']:10.3f} {r['base_eps_hat']:12.3f}")
-    OUT.mkdir(exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
     tag = "" if args.length == 1.2 else f"-lc{args.length:g}"
-    (OUT / f"nonlocal_sliding{tag}.json").write_text(json.dumps(out, indent=1))
-    plot(out, OUT / f"nonlocal_sliding{tag}.png")
-    print(f"wrote bench/out/nonlocal_sliding{tag}.json and .png")
+    (args.out / f"nonlocal_sliding{tag}.json").write_text(json.dumps(out, indent=1))
+    plot(out, args.out / f"nonlocal_sliding{tag}.png")
+    print(f"wrote {args.out}/nonlocal_sliding{tag}.json and .png")
     return 0
 
 
