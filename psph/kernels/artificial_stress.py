@@ -1,17 +1,18 @@
-"""Artificial stress against the tensile instability (Gray, Monaghan and Swift 2001, as
-used for soils by Bui et al. 2008, the paper's refs. [11, 18]): the part of C_ij in
-Eq. (26) that adds f_ij^n (R_i + R_j) to the pair stress, with f_ij = W(r_ij) / W(dx).
+"""Artificial stress against the tensile instability (Gray, Monaghan & Swift 2001, as used
+for soils by Bui et al. 2008, refs. [11, 18] of Lian et al. 2023): the part of C_ij in
+Eq. (26) of Lian et al. (2023) that adds f_ij^n (R_i + R_j) to the pair stress, with
+f_ij = W(r_ij) / W(dx).
 
-R_i is -epsilon times the tensile principal parts of particle i's in-plane EFFECTIVE
-stress sigma', rotated back to x, y: compression contributes nothing.
+R_i is -epsilon times the tensile principal parts of particle i's EFFECTIVE stress sigma',
+rotated back to the x, y (, z) axes; compression contributes nothing.
 
-Why the effective stress and not the total sigma' - p I (Eq. 2): the tensile instability
-is a clumping of the skeleton's particles, and any clump changes div v, which the pore
-water of Eq. (25) resists with its stiffness K_l / n. Under suction the total stress is
-tensile while the skeleton is not; R from the total stress then pushed the particles of
-a sheared front or corner apart, they dilated and the suction grew (issue 13, cause 2:
-`python -m psph.app.sliding`, the sliding block's corner reached -122 kPa with R from
-the total stress and -76 kPa with R from sigma' or with no artificial stress at all).
+Why the effective stress and not the total stress sigma' - p I (Eq. 2): the tensile
+instability is a clumping of the skeleton's particles, and any clump changes div v, which
+the pore water of Eq. (25) already resists with its stiffness K_l / n. Under suction the
+total stress is tensile while the skeleton is not, and an R built from it pushes the
+particles of a sheared front or corner apart, so they dilate and the suction grows (in
+the saturated sliding block the corner's pressure fell to -122 kPa with R from the total
+stress, -76 kPa with R from sigma' or without artificial stress).
 """
 
 import math
@@ -22,9 +23,20 @@ import numpy as np
 
 @nb.njit(cache=True)
 def artificial_stress(n, stress, epsilon, out):
-    """out[i] = (R_xx, R_yy, R_xy) for rows 0..n-1 (Pa); in 3D (out with 6 columns)
-    (R_xx, R_yy, R_zz, R_xy, R_yz, R_zx) from the three principal stresses
-    (`_tensile_part_3d`)."""
+    """The artificial stress R of rows 0..n-1, written into `out`.
+
+    Parameters
+    ----------
+    n : int
+        number of rows to compute.
+    stress : (cap, 4) or (cap, 6) float64 array
+        effective stress sigma' (Pa), Voigt order xx, yy, zz, xy (2D) and yz, zx (3D).
+    epsilon : float
+        artificial stress coefficient (dimensionless).
+    out : (cap, 3) or (cap, 6) float64 array
+        R (Pa): (R_xx, R_yy, R_xy) in 2D; with 6 columns the 3D form
+        (R_xx, R_yy, R_zz, R_xy, R_yz, R_zx) from the three principal stresses.
+    """
     if out.shape[1] == 6:
         a, vec, r = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))  # once a call
         for i in range(n):

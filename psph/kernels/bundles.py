@@ -43,8 +43,22 @@ class Cells(NamedTuple):
 
 def sorted_cells(cell_start: np.ndarray, order: np.ndarray, ncell: np.ndarray,
                  x: np.ndarray, n_owned: int | None = None) -> Cells:
-    """`Cells` of a cell list and the positions it sorts, rows below n_owned (default
-    all) owned (tests and drivers; the time loop fills its own x_sorted)."""
+    """`Cells` of a cell list and the positions it sorts (for tests and drivers; the time
+    loop fills its own x_sorted).
+
+    Parameters
+    ----------
+    cell_start, order, ncell : int64 arrays
+        the cell list of `neighbours.bin_particles`.
+    x : (n, dim) float64 array
+        positions (m), indexed as `order`.
+    n_owned : int, optional
+        rows below it are owned (default: all).
+
+    Returns
+    -------
+    Cells
+    """
     n = int(cell_start[int(np.prod(ncell))])
     from psph.kernels.neighbours import count_owned
 
@@ -82,7 +96,8 @@ class PairParams(NamedTuple):
     rho_l_b2: float = 0.0  # the body force's third component (3D)
 
     def typed(self) -> "PairParams":
-        """The same values as the compiled types (float, bool)."""
+        """The same values as the compiled types (float, bool), so that one compiled
+        specialisation serves every call."""
         return PairParams(*(bool(v) if isinstance(d, bool) else float(v)
                             for v, d in zip(self, _PAIR_DEFAULTS, strict=True)))
 
@@ -143,12 +158,27 @@ class StepParams(NamedTuple):
     b2: float = 0.0  # the body force's third component (3D)
 
     def typed(self) -> "StepParams":
-        """The same values as the compiled types (float, int, bool)."""
+        """The same values as the compiled types (float, int, bool), so that one compiled
+        specialisation serves every call."""
         kinds = (float,) * 8 + (int, float, bool, bool, bool, int, bool, float)
         return StepParams(*(k(v) for k, v in zip(kinds, self, strict=True)))
 
 
 def fields_of(cls, arrays: dict, **extra):
-    """An array bundle `cls` from a store's arrays by field name (and `extra`)."""
+    """An array bundle from a store's arrays, by field name.
+
+    Parameters
+    ----------
+    cls : NamedTuple class
+        the bundle (`PairFields`, `UpdateFields`, ...).
+    arrays : dict of str to array
+        the store's arrays by field name.
+    **extra : array
+        members taken from here instead of `arrays`.
+
+    Returns
+    -------
+    cls
+    """
     return cls(**{name: extra[name] if name in extra else arrays[name]
                   for name in cls._fields})

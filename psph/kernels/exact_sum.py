@@ -9,7 +9,7 @@ doubles whose exact sum is the exact sum of the rank's terms. The ranks' expansi
 then gathered and summed by `math.fsum`, correctly rounded (`Slabs.exact_sum`). The
 result is the correctly rounded exact sum of all terms: the same bits on any rank count,
 and the same bits whatever exact method built each expansion (a correctly rounded value
-is unique), so the chunk accumulators below changed no result.
+is unique), so the chunk accumulators below give the bits of the expansions.
 
 The terms themselves (a_k b_k rounded once) depend only on the particle, not on the
 partition, so rounding the products is harmless.
@@ -133,8 +133,22 @@ def _finish(acc: np.ndarray, partials: np.ndarray, m: int, zero: np.ndarray) -> 
 
 @nb.njit(cache=True)
 def dot_expansion(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) -> int:
-    """Expansion of sum_k a[k] b[k] over k < n into `partials` (EXPANSION_CAP,); returns
-    its length, or -1 if a term is not finite (partials[0] then holds it)."""
+    """The non-overlapping expansion of sum_k a[k] b[k] over k < n.
+
+    Parameters
+    ----------
+    a, b : (>= n,) float64 arrays
+        the factors (any units).
+    n : int
+        number of terms.
+    partials : (EXPANSION_CAP,) float64 array
+        receives the expansion's parts, in increasing magnitude.
+
+    Returns
+    -------
+    int
+        the expansion's length, or -1 if a term is not finite (partials[0] then holds it).
+    """
     acc = np.zeros(_CHUNKS, np.int64)
     terms = np.empty(_BLOCK)
     zero = np.zeros(2)
@@ -151,8 +165,23 @@ def dot_expansion(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) ->
 
 @nb.njit(cache=True)
 def sum_expansion(a: np.ndarray, n: int, partials: np.ndarray) -> int:
-    """Expansion of sum_k a[k] over k < n; as `dot_expansion` (allocates its scratch:
-    `sum_expansion_into` for a sum taken every step)."""
+    """The expansion of sum_k a[k] over k < n, as `dot_expansion` (allocates its scratch;
+    `sum_expansion_into` for a sum taken every step).
+
+    Parameters
+    ----------
+    a : (>= n,) float64 array
+        the terms.
+    n : int
+        number of terms.
+    partials : (EXPANSION_CAP,) float64 array
+        receives the expansion.
+
+    Returns
+    -------
+    int
+        the expansion's length, or -1 for a non-finite term.
+    """
     return sum_expansion_into(a, n, partials, np.zeros(_CHUNKS, np.int64), np.empty(_BLOCK),
                               np.zeros(2))
 
@@ -160,8 +189,22 @@ def sum_expansion(a: np.ndarray, n: int, partials: np.ndarray) -> int:
 @nb.njit(cache=True)
 def sum_expansion_into(a: np.ndarray, n: int, partials: np.ndarray, acc: np.ndarray,
                        terms: np.ndarray, zero: np.ndarray) -> int:
-    """`sum_expansion` with its scratch passed in: acc (CHUNKS int64), terms (BLOCK),
-    zero (2); all three are overwritten."""
+    """`sum_expansion` with its scratch passed in.
+
+    Parameters
+    ----------
+    a, n, partials
+        as `sum_expansion`.
+    acc : (CHUNKS,) int64 array
+    terms : (BLOCK,) float64 array
+    zero : (2,) float64 array
+        scratch, overwritten.
+
+    Returns
+    -------
+    int
+        the expansion's length, or -1 for a non-finite term.
+    """
     acc[:] = 0
     zero[:] = 0.0
     m = 0
@@ -184,13 +227,25 @@ SPECIAL, _POS_ZERO, _NEG_ZERO = _CHUNKS, _CHUNKS + 1, _CHUNKS + 2
 def dot_chunks(a: np.ndarray, b: np.ndarray, n: int, row: np.ndarray,
                terms: np.ndarray) -> None:
     """The terms a[k] b[k], k < n, as integers: their chunk accumulators, carried so that
-    every chunk but the top one lies in [-2^31, 2^31), into row[:_CHUNKS] (int64,
-    CHUNK_ROW long), and the counts of terms the chunks cannot hold (at or above 2^_BIG
-    or not finite), of +0 and of -0 terms. Rows of several ranks add exactly (integer
-    sums, any order, 2^31 ranks before a chunk could overflow), so `chunks_value` of
-    their sum is the correctly rounded exact sum of all terms on any partition: one
-    integer Allreduce instead of a gather of expansions (the CG's collectives on
-    several ranks). terms: scratch of BLOCK doubles."""
+    every chunk but the top one lies in [-2^31, 2^31), and the counts of terms the chunks
+    cannot hold (at or above 2^_BIG or not finite), of +0 and of -0 terms.
+
+    Rows of several ranks add exactly (integer sums, any order, 2^31 ranks before a chunk
+    could overflow), so `chunks_value` of their sum is the correctly rounded exact sum of
+    all terms on any partition: one integer Allreduce instead of a gather of expansions
+    (the CG's collectives on several ranks).
+
+    Parameters
+    ----------
+    a, b : (>= n,) float64 arrays
+        the factors.
+    n : int
+        number of terms.
+    row : (CHUNK_ROW,) int64 array
+        receives the chunks (row[:CHUNKS]) and the counts (SPECIAL, +0, -0).
+    terms : (BLOCK,) float64 array
+        scratch.
+    """
     row[:] = 0
     bits = terms.view(np.int64)
     for start in range(0, n, _BLOCK):
@@ -218,8 +273,19 @@ def dot_chunks(a: np.ndarray, b: np.ndarray, n: int, row: np.ndarray,
 
 @nb.njit(cache=True)
 def dot_chunk_rows(a: tuple, b: tuple, n: int, rows: np.ndarray, terms: np.ndarray) -> None:
-    """`dot_chunks` of each pair (a[j], b[j]) into rows[j], in one call (a and b: tuples
-    of equally typed 1-D arrays, as many as rows)."""
+    """`dot_chunks` of each pair (a[j], b[j]) into rows[j], in one call.
+
+    Parameters
+    ----------
+    a, b : tuples of (>= n,) float64 arrays
+        the factors, as many as rows.
+    n : int
+        number of terms.
+    rows : (len(a), CHUNK_ROW) int64 array
+        receives one `dot_chunks` row per pair.
+    terms : (BLOCK,) float64 array
+        scratch.
+    """
     for j in range(len(a)):
         dot_chunks(a[j], b[j], n, rows[j], terms)
 
@@ -227,8 +293,24 @@ def dot_chunk_rows(a: tuple, b: tuple, n: int, rows: np.ndarray, terms: np.ndarr
 @nb.njit(cache=True)
 def chunk_row_values(rows: np.ndarray, partials: np.ndarray, acc: np.ndarray,
                      out: np.ndarray) -> bool:
-    """`chunks_value` of each (summed) row into out; False, with out untouched, if a row
-    counts a term the chunks cannot hold (the caller then sums expansions)."""
+    """`chunks_value` of each (summed) row.
+
+    Parameters
+    ----------
+    rows : (m, CHUNK_ROW) int64 array
+        `dot_chunks` rows, summed over the ranks.
+    partials : (EXPANSION_CAP,) float64 array
+    acc : (CHUNKS,) int64 array
+        scratch.
+    out : (m,) float64 array
+        receives the values.
+
+    Returns
+    -------
+    bool
+        False, with out untouched, if a row counts a term the chunks cannot hold (the
+        caller then sums expansions).
+    """
     for j in range(rows.shape[0]):
         if rows[j, SPECIAL] > 0:
             return False
@@ -248,9 +330,23 @@ def _carry(acc: np.ndarray) -> None:
 @nb.njit(cache=True)
 def chunks_value(row: np.ndarray, partials: np.ndarray, acc: np.ndarray) -> float:
     """The correctly rounded value of a (summed) `dot_chunks` row, as `exact_dot` of all
-    the terms gives it (-0.0 when the non-zero terms cancel or are absent and every zero
-    term is -0.0). Call only when row[SPECIAL] == 0 (else the caller sums expansions).
-    acc: scratch of CHUNKS int64."""
+    the terms gives it. Call only when row[SPECIAL] == 0 (else the caller sums
+    expansions).
+
+    Parameters
+    ----------
+    row : (CHUNK_ROW,) int64 array
+        a `dot_chunks` row.
+    partials : (EXPANSION_CAP,) float64 array
+    acc : (CHUNKS,) int64 array
+        scratch.
+
+    Returns
+    -------
+    float
+        the sum; -0.0 when the non-zero terms cancel or are absent and every zero term is
+        -0.0.
+    """
     acc[:] = row[:_CHUNKS]
     m = _chunks_to_expansion(acc, partials, 0)
     if m == 0:
@@ -259,15 +355,38 @@ def chunks_value(row: np.ndarray, partials: np.ndarray, acc: np.ndarray) -> floa
 
 
 def local_parts(partials: np.ndarray, m: int) -> np.ndarray:
-    """The expansion as an array to gather (a non-finite term as a single part)."""
+    """The expansion as an array to gather.
+
+    Parameters
+    ----------
+    partials : float64 array
+        the expansion of `dot_expansion` or `sum_expansion`.
+    m : int
+        its length (-1: a non-finite term, kept as a single part).
+
+    Returns
+    -------
+    float64 array
+        a view of partials.
+    """
     return partials[:1] if m < 0 else partials[:m]
 
 
 def exact_total(parts: list[np.ndarray]) -> float:
-    """Correctly rounded sum of the gathered expansions of all ranks (NaN if a term was
-    not finite or the sum overflows). math.fsum is correctly rounded; it is given the
-    parts as one Python list (no array copies: a CG solve on several ranks calls this
-    twice an iteration)."""
+    """The correctly rounded sum of the gathered expansions of all ranks, by `math.fsum`
+    over one Python list (no array copies: a CG solve on several ranks calls this twice
+    an iteration).
+
+    Parameters
+    ----------
+    parts : list of float64 arrays
+        each rank's `local_parts`.
+
+    Returns
+    -------
+    float
+        the sum; NaN if a term was not finite or the sum overflows.
+    """
     try:
         total = math.fsum([v for p in parts for v in p.tolist()])
     except (OverflowError, ValueError):  # ValueError: inf - inf
@@ -277,10 +396,21 @@ def exact_total(parts: list[np.ndarray]) -> float:
 
 @nb.njit(cache=True)
 def rounded_sum(partials: np.ndarray, m: int) -> float:
-    """The correctly rounded value of the expansion partials[:m] (increasing magnitude,
-    non-overlapping, as `_grow` leaves it): the final step of CPython's `math.fsum`, so
-    the same bits as `exact_total` of one rank's parts. NaN for a non-finite term (m < 0)
-    or an overflow."""
+    """The correctly rounded value of an expansion: the final step of CPython's
+    `math.fsum`, so the same bits as `exact_total` of one rank's parts.
+
+    Parameters
+    ----------
+    partials : float64 array
+        the expansion, increasing magnitude, non-overlapping (as `_grow` leaves it).
+    m : int
+        its length; < 0 for a non-finite term.
+
+    Returns
+    -------
+    float
+        the sum; NaN for a non-finite term or an overflow.
+    """
     if m < 0:
         return math.nan
     if m == 0:
@@ -308,7 +438,22 @@ def rounded_sum(partials: np.ndarray, m: int) -> float:
 
 @nb.njit(cache=True)
 def exact_dot(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) -> float:
-    """sum_k a[k] b[k] over k < n, correctly rounded (one rank's `Slabs.exact_sum`)."""
+    """sum_k a[k] b[k] over k < n, correctly rounded (one rank's `Slabs.exact_sum`).
+
+    Parameters
+    ----------
+    a, b : (>= n,) float64 arrays
+        the factors.
+    n : int
+        number of terms.
+    partials : (EXPANSION_CAP,) float64 array
+        scratch.
+
+    Returns
+    -------
+    float
+        the sum (NaN for a non-finite term).
+    """
     return rounded_sum(partials, dot_expansion(a, b, n, partials))
 
 
@@ -316,8 +461,20 @@ def exact_dot(a: np.ndarray, b: np.ndarray, n: int, partials: np.ndarray) -> flo
 def chunked_dot(a: np.ndarray, b: np.ndarray, n: int, row: np.ndarray, terms: np.ndarray,
                 acc: np.ndarray, partials: np.ndarray) -> float:
     """`exact_dot` (the same bits) through the chunk accumulators of `dot_chunks`, about
-    twice as fast; a huge or non-finite term takes `exact_dot` itself. row, terms, acc:
-    scratch as `dot_chunks` and `chunks_value`."""
+    twice as fast; a huge or non-finite term takes `exact_dot` itself.
+
+    Parameters
+    ----------
+    a, b, n, partials
+        as `exact_dot`.
+    row, terms, acc
+        scratch as `dot_chunks` and `chunks_value`.
+
+    Returns
+    -------
+    float
+        the sum.
+    """
     dot_chunks(a, b, n, row, terms)
     if row[SPECIAL] > 0:
         return exact_dot(a, b, n, partials)

@@ -6,21 +6,20 @@ other two is below the same 1.5. The ponding and drained conditions hold its por
 pressure there (`update.make_advance`, `projection.imposed_increments`), and particle
 shifting leaves it where it is (`shifting`).
 
-Why not the trace in 3D as well. Under a plane face M has one small eigenvalue, along the
+Why not the trace in 3D as well: under a plane face M has one small eigenvalue, along the
 face's normal, and dim - 1 larger ones along the face. The 2D trace is the normal's plus
-the tangent's. The 3D trace adds a second tangent, so the test psph used until
-2026-12-06 in 3D (trace < 2.25, 3/4 of 3) gave the tangents twice the normal's weight,
-and a tangent that is fuller or emptier than a lattice's (a compressed toe, a thin
-sheet) moved it. The normal plus the tangents' mean, (trace + l1) / 2, weighs them as the
-2D trace does. On a lattice at h = 1.2 dx it agrees with the 2D test row by row: a face
-1.281 in 2D and 1.271 in 3D, the row below 1.921 and 1.921, an edge 0.786 and 0.845,
-a 3D corner 0.579 (`tests/test_kernels_3d.py -k free_surface`).
+the tangent's; the 3D trace (say trace < 2.25, 3/4 of 3) would give the tangents twice
+the normal's weight, so that a tangent fuller or emptier than a lattice's (a compressed
+toe, a thin sheet) moves the test. The normal plus the tangents' mean, (trace + l1) / 2,
+weighs them as the 2D trace does. On a lattice at h = 1.2 dx it agrees with the 2D test
+row by row: a face 1.281 in 2D and 1.271 in 3D, the row below 1.921 and 1.921, an edge
+0.786 and 0.845, a 3D corner 0.579 (`tests/test_kernels_3d.py -k free_surface`).
 
 The smallest eigenvalue is the normal's on a face. Under an edge or at a corner the
 normal is not one direction, but there every test flags the particle by a wide margin.
-The two smallest eigenvalues summed (tried on 2026-12-06) are the normal and the
-emptier tangent: they flagged more of a compressed toe than the 2D test does
-(docs/vv/collapse_saturated_3d.md, "The drained surface in 3D").
+The two smallest eigenvalues summed are the normal and the emptier tangent: they flag
+more of a compressed toe than the 2D test does (docs/vv/collapse_saturated_3d.md, "The
+drained surface in 3D").
 """
 
 import math
@@ -32,8 +31,19 @@ FREE_SURFACE = 1.5  # trace(M) in 2D, (trace(M) + its smallest eigenvalue) / 2 i
 
 @nb.njit(cache=True)
 def eigenvalues_3d(a00, a01, a02, a11, a12, a22):
-    """The eigenvalues l1 <= l2 <= l3 of the symmetric 3x3 matrix A (the trigonometric
-    solution of the characteristic cubic)."""
+    """The eigenvalues of a symmetric 3x3 matrix A, by the trigonometric solution of the
+    characteristic cubic.
+
+    Parameters
+    ----------
+    a00, a01, a02, a11, a12, a22 : float
+        the upper triangle of A (any unit; M of Eq. (22) is dimensionless).
+
+    Returns
+    -------
+    l1, l2, l3 : float
+        the eigenvalues, l1 <= l2 <= l3.
+    """
     q = (a00 + a11 + a22) / 3.0
     p1 = a01 * a01 + a02 * a02 + a12 * a12
     p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
@@ -53,8 +63,21 @@ def eigenvalues_3d(a00, a01, a02, a11, a12, a22):
 
 @nb.njit(cache=True)
 def on_free_surface(m, cm: int, dim: int) -> bool:
-    """Whether the particle whose sums row is `m` (M's dim x dim entries row-major from
-    column `cm`) is on the free surface (module docstring)."""
+    """Whether a particle is on the free surface (the test of the module docstring).
+
+    Parameters
+    ----------
+    m : (nsums,) float64 array
+        the particle's row of the pair sums.
+    cm : int
+        first column of M (dim x dim, row-major, dimensionless).
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    bool
+    """
     if dim == 2:
         return m[cm] + m[cm + 3] < FREE_SURFACE
     a00, a11, a22 = m[cm], m[cm + 4], m[cm + 8]

@@ -1,4 +1,4 @@
-"""Drained sides at the true surface: antisymmetric pressure images (issue 14, item 3).
+"""Drained sides at the true surface: antisymmetric pressure images.
 
 A drained side holds p = 0 on its surface, the plane x[axis] = pos, not on the outer
 particle layer dx/2 inside it. The Darcy terms of Eq. (23) (the sums Q, sA, sAp and sApsi
@@ -14,8 +14,8 @@ recorded (same order, so as partition-independent as the sweep) finds them all.
 An image pair has both rows within 2h of the plane (|x_a - x_b*| >= d_a + d_b, their
 distances to it), so the pass skips a pair whose row a is farther (`_within_reach`). The
 sweep records a row's pairs one after another, so that test is made once a row, and the
-pairs far from the plane (most of them) cost a read of their row a only: in 3D the pass
-took 21 ms of a 122 ms step of the throughput bench's block before (issue 37).
+pairs far from the plane (most of them) cost a read of their row a only (without the
+test the pass takes a sixth of a 3D step).
 
 A plane row of `planes` is (axis, pos, sign, active): sign +1 with the soil at larger
 x[axis]. Walls with mirror ghosts get the same extension from their ghosts instead (p of a
@@ -117,7 +117,18 @@ def _components(ax, d_ax, d_o1, d_o2):
 
 
 def make_image_sums(dim: int):
-    """`image_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
+    """`image_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`).
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `image_sums`.
+    """
     three = dim == 3
 
     @nb.njit(cache=True, error_model="numpy")
@@ -126,10 +137,39 @@ def make_image_sums(dim: int):
                    h: float, tpi_alpha: float, rho_l_b0: float, rho_l_b1: float,
                    sums: np.ndarray, rho_l_b2: float = 0.0) -> None:
         """Add the images across each active plane to the Darcy sums (Q, SUM_A, SUM_AP,
-        SUM_APSI) of owned rows: the image of the other row of every recorded pair, then each
-        row's own image. p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the elevation head
-        psi = -rho_l b.x is taken at the image's position (it is a known field, not
-        mirrored). 2D or 3D by x (sums of the 3D layout in 3D)."""
+        SUM_APSI) of owned rows: the image of the other row of every recorded pair, then
+        each row's own image. p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the
+        elevation head psi = -rho_l b.x is taken at the image's position (it is a known
+        field, not mirrored).
+
+        Parameters
+        ----------
+        n_owned : int
+            owned rows 0..n_owned-1.
+        n_pairs : int
+            pairs recorded by `interactions.pair_sums`.
+        pairs : (>= n_pairs, 2) int64 array
+            the recorded pairs (a, b), in visiting order.
+        x : (n, dim) float64 array
+            positions (m).
+        p, p_prev : (n,) float64 arrays
+            pore pressure now and one step before (Pa).
+        vol : (n,) float64 array
+            particle volumes (m^3; m^2 per unit thickness in 2D).
+        perm : (n,) float64 array
+            hydraulic conductivity k (m/s).
+        planes : (n_planes, 4) float64 array
+            rows (axis, position (m), sign, active): sign +1 with the soil at larger
+            x[axis]; active 0 while the side is not yet drained.
+        h : float
+            smoothing length (m).
+        tpi_alpha : float
+            alpha of Eq. (39) (0 for the explicit scheme).
+        rho_l_b0, rho_l_b1, rho_l_b2 : float
+            rho_l times the body force (N/m^3); rho_l_b2 in 3D only.
+        sums : (cap, nsums) float64 array
+            the pair sums, `sum_columns.sum_layout(dim)`; the Darcy columns are added to.
+        """
         support2 = 4.0 * h * h
         for q in range(planes.shape[0]):
             ax, pos, sg = _plane(planes, q)
@@ -198,9 +238,26 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
     The velocity-correction part (rho_scale = dt) is imaged from the start: the
     correction takes the pair-symmetric gradient of Eq. (26), whose self term
     -2 dp_i S_i / rho_i is, on a plane surface, the antisymmetric image of the particle's
-    own increment. Without that image in the operator the correction changed div v at a
+    own increment. Without that image in the operator the correction changes div v at a
     loaded top by other than the solve counted on, and at twice the solid cap a
-    period-2 mode of p grew about 2.8x a step (issue 14; `tests/test_projection.py`)."""
+    period-2 mode of p grows about 2.8x a step (`tests/test_projection.py`).
+
+    Parameters
+    ----------
+    n_owned, n_pairs, pairs, x, perm, vol, planes, h
+        as `image_sums`.
+    rho : (n,) float64 array
+        mixture density (kg/m^3).
+    k_scale, rho_scale : float
+        the factors of the Darcy and velocity-correction parts, as
+        `laplacian.pair_weights` (m^3/N and s).
+    w : (n_pairs,) float64 array
+        the pairs' weights without images (`laplacian.pair_weights`).
+    w_diag, w_off : (n_pairs,) float64 arrays
+        receive w + w* and w - w*.
+    storage : (n,) float64 array
+        a row's own image is added here (V_i storage_i q_i of the operator).
+    """
     support2 = 4.0 * h * h
     for k in range(n_pairs):
         w_diag[k] = w[k]
@@ -238,8 +295,30 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
 @nb.njit(cache=True)
 def row_displacement(n_owned: int, x: np.ndarray, u: np.ndarray, axis: int, pos: float,
                      sign: float, width: float, out: np.ndarray) -> int:
-    """out[:m] = u[i, axis] of the owned rows within `width` of the plane on its soil side
-    (the outer particle layer of a free drained side), in row order; returns m."""
+    """The displacements along `axis` of the outer particle layer of a free drained side.
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    x, u : (n, dim) float64 arrays
+        positions and displacements (m).
+    axis : int
+        the plane's normal axis.
+    pos : float
+        the plane's position (m).
+    sign : float
+        +1 with the soil at larger x[axis], else -1.
+    width : float
+        thickness of the layer (m).
+    out : (>= n_owned,) float64 array
+        receives u[i, axis] of the rows within `width` on the soil side, in row order.
+
+    Returns
+    -------
+    int
+        the number m of rows written.
+    """
     m = 0
     for i in range(n_owned):
         d = sign * (x[i, axis] - pos)

@@ -1,46 +1,42 @@
 """The fused pair loop: every neighbour sum of one coupled step in one sweep.
 
 Each pair (a, b) with |x_a - x_b| < 2h is visited once (half stencil over the cell list)
-and contributes to both particles. The corrected gradient Eq. (22) needs the inverse of the
-moment matrix M_i = sum_j V_j (x_j - x_i) (x) grad_i W_ij, which is only known after the
-sweep; since the correction is linear, the sweep accumulates raw sums and `update.py`
-applies M_i^-1 afterwards. The columns of `sums` (one row per particle) are named in
-`sum_columns.py`: the moment matrix M, the velocity, pressure and porosity-rate gradients
-GV, GP, GN (Eq. 22, 24), the Darcy sums Q, SUM_A, SUM_AP, SUM_APSI (Eq. 23, 33, 38), the
-div(k dv/dt) sums GA, the stress divergence DVDT (Eq. 26) and the wall stretching
+and contributes to both particles. The corrected gradient, Eq. (22) of Lian et al. (2023),
+needs the inverse of the moment matrix M_i = sum_j V_j (x_j - x_i) (x) grad_i W_ij, which is
+only known after the sweep; since the correction is linear, the sweep accumulates raw sums
+and `update.py` applies M_i^-1 afterwards. The columns of `sums` (one row per particle) are
+named in `sum_columns.py`: the moment matrix M, the velocity, pressure and porosity-rate
+gradients GV, GP, GN (Eq. 22, 24), the Darcy sums Q, SUM_A, SUM_AP, SUM_APSI (Eq. 23, 33,
+38), the div(k dv/dt) sums GA, the stress divergence DVDT (Eq. 26) and the wall stretching
 correction GS. Only rows of owned particles (index < n_owned) are written.
 
-* Rows n_real.. are wall ghosts. On them `v_slip` (vs) holds the velocity mirrored as on
-a free-slip wall, where `v` holds -v on a fixed (no-slip) wall. Gn takes vs, and
-Gv + Gs is the velocity gradient with vs; only pairs with a ghost add to Gs.
-`update.advance` takes div v (Eq. 24-25) and the normal strain rates from Gv + Gs, the
-shear rate from Gv.
-Why: mirror ghosts exist only under the soil, so the no-slip ghost layer under soil
-sliding at U ends where the soil ends. At a debris front the particle "stretches"
-against its own ghosts by about 0.4 U/dx of spurious div v (tests/test_walls.py), which
-Eq. (24)-(25) turn into run-away suction. A fixed wall resists shear, not stretching
-along itself; the paper's virtual wall particles [11] line the whole base and do not
-have this defect. On free-slip ghosts vs = v, so Gs = 0 without a fixed wall.
-The artificial viscosity (Monaghan, in C_ij of Eq. 26) takes vs on ghost pairs, and in a
-dry scene acts between real particles only, not on pairs with a ghost or boundary
-particle (rows n_real..). With -v on a fixed wall's
-ghosts, those ahead of a particle sliding at U approached it at 2U, those behind receded,
-and the one-sided term pushed the bottom row backward and upward. That drag (7x the
-soil's strength) and lift (suction under a nearly undrained soil) were numerical
-(issue 13, cause 1: `python -m psph.app.sliding`), so the ghost pairs took vs. But even
-with vs a ghost pair keeps a wall-normal dashpot: a particle approaching the wall at
-v_n approaches its mirror at 2 v_n, and the viscosity pushes it back with a stress of
-about rho alpha c h v_n / y (y its distance from the wall) that is not the soil's. A soil
-that thins toward the wall as it flows (a layer stretched along the floor, isochoric at
-psi = 0) then rests on that dashpot instead of on its own sigma_nn: in a layer one row
-thick the viscosity carried 55 % of the row's weight after 0.2 s at 15 degrees, the
-row's sigma_yy relaxed from -470 to -15 Pa through the elastic div v of its stretching,
-its Drucker-Prager strength with it, and it slid at half of g sin(theta) (issue 37,
-`bench/diagnostics/thin_layer_friction.py`, `bench/diagnostics/thin_terms.py`). The wall's
+Walls. Rows n_real.. are wall ghosts. On them `v_slip` (vs) holds the velocity mirrored as
+on a free-slip wall, where `v` holds -v on a fixed (no-slip) wall. GN takes vs, and
+GV + GS is the velocity gradient with vs; only pairs with a ghost add to GS.
+`update.advance` takes div v (Eq. 24-25) and the normal strain rates from GV + GS, the
+shear rate from GV. Why: mirror ghosts exist only under the soil, so the no-slip ghost
+layer under soil sliding at U ends where the soil ends, and at a debris front a particle
+would "stretch" against its own ghosts by about 0.4 U/dx of spurious div v
+(tests/test_walls.py), which Eq. (24)-(25) turn into run-away suction. A fixed wall
+resists shear, not stretching along itself; the paper's virtual wall particles [11] line
+the whole base and do not have this defect. On free-slip ghosts vs = v, so GS = 0 without
+a fixed wall.
+
+The artificial viscosity (Monaghan, in C_ij of Eq. 26) takes vs on ghost pairs: with -v,
+the ghosts ahead of a particle sliding at U approach it at 2U, those behind recede, and the
+one-sided term pushes the bottom row backward and upward, a numerical drag (7x the soil's
+strength) and lift (suction under a nearly undrained soil). In a dry scene it acts between
+real particles only, not on pairs with a ghost or boundary particle (rows n_real..): even
+with vs a ghost pair keeps a wall-normal dashpot (a particle approaching the wall at v_n
+approaches its mirror at 2 v_n and is pushed back with a stress of about
+rho alpha c h v_n / y, y its distance from the wall) that is not the soil's. A soil that
+thins toward the wall as it flows (a layer stretched along the floor, isochoric at
+psi = 0) would rest on that dashpot instead of on its own sigma_nn, relax its sigma_nn and
+its Drucker-Prager strength with it, and slide at about half of g sin(theta). The wall's
 reactions are the ghosts' stresses: the normal one with the weight continued
-(`ghosts.py`), the shear one on a fixed wall, which resists sliding. A coupled scene
-keeps the ghost pairs' viscosity: without it the saturated sliding block of
-tests/test_basal_sliding.py reached -112 kPa of excess p at its base (-67 kPa with it).
+(`ghosts.py`), the shear one on a fixed wall, which resists sliding. A coupled scene keeps
+the ghost pairs' viscosity: without it the saturated sliding block of
+tests/test_basal_sliding.py reaches -112 kPa of excess p at its base (-67 kPa with it).
 """
 
 import math
@@ -60,14 +56,35 @@ def fastmath_of(dim: int):
     arithmetic is the same code on every rank). The fused operations are the CPU's and
     LLVM's choice, so 3D bits are those of one machine type and one numba version: a
     restart on another kind of node continues the run, not its bits. None in 2D, which
-    keeps its bits on any machine."""
+    keeps its bits on any machine.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    set of str or False
+        numba's `fastmath` argument.
+    """
     return {"arcp", "contract"} if dim == 3 else False
 
 
 def make_pair_sums(dim: int):
-    """`pair_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`): stress in Voigt
-    order xx, yy, zz, xy (2D) and yz, zx (3D); 2D: the same bits as the hand-written 2D
-    sweep (tests/test_kernels.py, the runs' bitwise tests)."""
+    """`pair_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`), stress in Voigt
+    order xx, yy, zz, xy (2D) and yz, zx (3D).
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `pair_sums`.
+    """
     lay = sum_layout(dim)
     cm, cgv, cgp, cgn, cq = lay.M, lay.GV, lay.GP, lay.GN, lay.Q
     ca, cap_, capsi, cga, cdv, cgs = (lay.SUM_A, lay.SUM_AP, lay.SUM_APSI, lay.GA,
@@ -80,23 +97,43 @@ def make_pair_sums(dim: int):
     @nb.njit(cache=True, error_model="numpy", fastmath=fastmath_of(dim))
     def pair_sums(n_total, n_owned, n_real, f, cells, par, sums, rec):
         """Accumulate the sums of `sum_columns.py` (`sum_layout(dim)`) for particles
-            0..n_owned-1.
+        0..n_owned-1.
 
-        f: `bundles.PairFields` of rows 0..n_total-1; rows n_real.. are wall ghosts, whose
-        `v_slip` (free-slip mirror) enters GN and GS (see the module docstring).
-        cells: `bundles.Cells` of the pair sweep's grid (cells of side 2h /
-        `neighbours.pair_cell_span(dim)`: side h in 3D).
-        par: `bundles.PairParams`: coupled computes the pressure-related sums (GP, GN, Q,
-        SUM_A, SUM_AP, SUM_APSI); acc_term the div(k dv/dt) sums GA; rho_l_b = rho_l * body
-        force (N/m^3); the artificial stress f.astress (xx, yy, xy; 3D: xx, yy, zz, xy, yz,
-        zx) enters the pair stress with weight
-        (W(r) / w_dx)^as_n (C_ij of Eq. 26), off
-        at as_n = 0; p_weight = 1 puts the pore pressure in the pair's total stress (Eq. 26
-        as written), 0 leaves it out for `update.pore_pressure_force` to add it as a
-        corrected gradient; record writes the visited pairs (a, b) and grad_a W_ab to
-        rec (`bundles.PairRecord`) in visiting order, for `velocity_gradient_sums`.
-        Returns the number of pairs recorded, or minus the number of pairs if rec.pairs is
-        too short for them (the sums are complete either way).
+        Parameters
+        ----------
+        n_total : int
+            rows in use: owned, halo, then wall ghosts.
+        n_owned : int
+            owned rows 0..n_owned-1.
+        n_real : int
+            rows n_real.. are wall ghosts, whose `v_slip` (free-slip mirror) enters GN and
+            GS (module docstring).
+        f : `bundles.PairFields`
+            the fields of rows 0..n_total-1 (SI units: m, m/s, Pa, m^3, kg/m^3, m/s for
+            the hydraulic conductivity, m/s^2); the artificial stress f.astress (Pa; xx,
+            yy, xy; 3D: xx, yy, zz, xy, yz, zx) enters the pair stress with weight
+            (W(r) / w_dx)^as_n (C_ij of Eq. 26).
+        cells : `bundles.Cells`
+            the pair sweep's grid (cells of side 2h / `neighbours.pair_cell_span(dim)`:
+            side h in 3D).
+        par : `bundles.PairParams`
+            h (m); coupled: compute the pressure-related sums (GP, GN, Q, SUM_A, SUM_AP,
+            SUM_APSI); acc_term: the div(k dv/dt) sums GA; rho_l_b = rho_l times the body
+            force (N/m^3); as_n = 0: no artificial stress; p_weight = 1 puts the pore
+            pressure in the pair's total stress (Eq. 26 as written), 0 leaves it out for
+            `update.pore_pressure_force` to add it as a corrected gradient; record: write
+            the visited pairs.
+        sums : (cap, nsums) float64 array
+            receives the sums of the owned rows.
+        rec : `bundles.PairRecord`
+            receives the visited pairs (a, b) and grad_a W_ab (1/m^(dim+1)) in visiting
+            order when par.record, for `velocity_gradient_sums`.
+
+        Returns
+        -------
+        int
+            the number of pairs recorded, or minus the number of pairs if rec.pairs is too
+            short for them (the sums are complete either way).
         """
         v, v_slip, stress, p, p_prev = f.v, f.v_slip, f.stress, f.p, f.p_prev
         poro, vol, rho, perm, acc, astress = f.poro, f.vol, f.rho, f.perm, f.acc, f.astress
@@ -215,8 +252,8 @@ def make_pair_sums(dim: int):
                             t2 = szx * g0 + syz * g1 + szz * g2
                         rho_b = rho[b]
                         # artificial viscosity (Monaghan), part of C_ij in Eq. (26),
-                        # between real particles only in a dry scene: "Walls" in the
-                        # module docstring
+                        # between real particles only in a dry scene (the module
+                        # docstring)
                         pi_ab = 0.0
                         vdotr = ds0 * dx0 + ds1 * dx1
                         if dim == 3:
@@ -304,7 +341,18 @@ pair_sums_3d = make_pair_sums(3)
 
 def make_velocity_gradient_sums(dim: int):
     """`velocity_gradient_sums` in `dim` = 2 or 3 dimensions (one source, `dims.py`), over
-    `sums` of `sum_layout(dim)`; 2D: the same bits as the hand-written 2D sweep."""
+    `sums` of `sum_layout(dim)`.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `velocity_gradient_sums`.
+    """
     lay = sum_layout(dim)
     gv, gs, gn, nt = lay.GV, lay.GS, lay.GN, dim * dim
 
@@ -319,8 +367,30 @@ def make_velocity_gradient_sums(dim: int):
         Used by the symplectic step (`time.integrator = "symplectic"`): after the kick
         v^(n+1) = v^n + dt a^n, the stress (Eq. 11), porosity (Eq. 24) and pressure
         (Eq. 25) rates take the new velocity, the staggered order of the leapfrog
-        Eq. (27). And by the pressure projection after its velocity correction
-        (`Simulation._project`).
+        Eq. (27). And by the pressure projection after its velocity correction.
+
+        Parameters
+        ----------
+        n_owned : int
+            owned rows 0..n_owned-1.
+        n_real : int
+            rows n_real.. are wall ghosts.
+        n_pairs : int
+            number of recorded pairs.
+        pairs : (>= n_pairs, 2) int64 array
+            the pairs (a, b) of `pair_sums`.
+        pair_g : (>= n_pairs, dim) float64 array
+            grad_a W_ab (1/m^(dim+1)).
+        v, v_slip : (cap, dim) float64 arrays
+            velocity and its free-slip mirror on ghosts (m/s).
+        poro : (cap,) float64 array
+            porosity n.
+        vol : (cap,) float64 array
+            particle volumes (m^3; m^2 per unit thickness in 2D).
+        coupled : bool
+            recompute GN too.
+        sums : (cap, nsums) float64 array
+            the pair sums; GV, GS (and GN) of the owned rows are overwritten.
         """
         for i in range(n_owned):
             for c in range(nt):
@@ -363,7 +433,25 @@ def symmetric_gradient_sums(n_owned, n_pairs, pairs, pair_g, vol, q, out):
     `pair_sums` recorded, in their visiting order (partition-independent): the
     pair-symmetric gradient of Eq. (26) for a scalar q (the projection's pressure
     correction), and with q = 1/2 the concentration gradient of particle shifting; 2D or
-    3D by pair_g."""
+    3D by pair_g.
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    n_pairs : int
+        number of recorded pairs.
+    pairs : (>= n_pairs, 2) int64 array
+        the pairs (a, b) of `pair_sums`.
+    pair_g : (>= n_pairs, dim) float64 array
+        grad_a W_ab (1/m^(dim+1)).
+    vol : (cap,) float64 array
+        particle volumes (m^3; m^2 per unit thickness in 2D).
+    q : (cap,) float64 array
+        the scalar (any unit, e.g. Pa).
+    out : (cap, dim) float64 array
+        receives the gradient sums (unit of q per m).
+    """
     dim = pair_g.shape[1]
     for i in range(n_owned):
         for d in range(dim):

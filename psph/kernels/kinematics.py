@@ -1,8 +1,8 @@
-"""The kinematics of a 3D step (issue 37): the corrected velocity gradient of Eq. (22) from
-the sums of `interactions.pair_sums` (3D layout, `sum_columns.sum_layout(3)`), and the
-linear elastic Jaumann stress rate of Eq. (11) with the full spin. The 2D step keeps its
-own spelt-out plane-strain form in `update.py`; these are its 3D counterparts, checked
-against numpy in tests/test_kernels_3d.py.
+"""The kinematics of a 3D step: the corrected velocity gradient of Eq. (22) of Lian et al.
+(2023) from the sums of `interactions.pair_sums` (3D layout, `sum_columns.sum_layout(3)`),
+and the linear elastic Jaumann stress rate of Eq. (11) with the full spin. The 2D step
+keeps its spelt-out plane-strain form in `update.py`; these are its 3D counterparts,
+checked against numpy in tests/test_kernels_3d.py.
 """
 
 import numba as nb
@@ -10,8 +10,21 @@ import numba as nb
 
 @nb.njit(cache=True, inline="always")
 def inverse_moment_3d(s, c):
-    """Inverse of the 3x3 moment matrix in s[c:c + 9] (row-major), by cofactors; identity
-    (no correction) where it is near-singular, as `_inverse_moment`."""
+    """Inverse of the 3x3 moment matrix M of Eq. (22), by cofactors.
+
+    Parameters
+    ----------
+    s : (nsums,) float64 array
+        a particle's row of the pair sums.
+    c : int
+        first column of M (row-major, dimensionless).
+
+    Returns
+    -------
+    tuple of 9 float
+        M^-1 row-major; the identity (no correction) where |det M| < 1e-3, e.g. a
+        particle with too few neighbours.
+    """
     a00, a01, a02 = s[c], s[c + 1], s[c + 2]
     a10, a11, a12 = s[c + 3], s[c + 4], s[c + 5]
     a20, a21, a22 = s[c + 6], s[c + 7], s[c + 8]
@@ -41,11 +54,28 @@ def _entry(s, gv, gs, mi, a, b):
 
 @nb.njit(cache=True, inline="always")
 def velocity_gradient_3d(s, gv, gs, mi, correct_strain, dry):
-    """L[a][b] = dv_a/dx_b = G[a, n] Minv[n, b] (Eq. 22) as 9 values, row-major, from the
-    sums' GV at column gv and GS at gs and the inverse moment mi (9 values): the
-    stretching (diagonal) from GV + GS, the shear from GV, as in 2D (`interactions.py`,
-    "Walls"); without `correct_strain` the shear from the plain gradient GV, and with
-    `dry` the stretching too (the 2D step's rules, `update.advance`)."""
+    """The velocity gradient L[a][b] = dv_a/dx_b = G[a, n] Minv[n, b] of Eq. (22): the
+    stretching (diagonal) from GV + GS, the shear from GV, as in 2D (`interactions.py`:
+    a fixed wall resists shear, not stretching along itself).
+
+    Parameters
+    ----------
+    s : (nsums,) float64 array
+        a particle's row of the pair sums.
+    gv, gs : int
+        first columns of GV and GS (3x3, row-major; 1/s).
+    mi : tuple of 9 float
+        M^-1 of `inverse_moment_3d`.
+    correct_strain : bool
+        False: the shear from the plain gradient GV (Bui et al. 2008), as the 2D step.
+    dry : bool
+        with correct_strain False, the stretching from the plain gradient too.
+
+    Returns
+    -------
+    tuple of 9 float
+        L row-major (1/s).
+    """
     l00 = _entry(s, gv, gs, mi, 0, 0)
     l01 = _entry(s, gv, gs, mi, 0, 1)
     l02 = _entry(s, gv, gs, mi, 0, 2)
@@ -67,9 +97,23 @@ def velocity_gradient_3d(s, gv, gs, mi, correct_strain, dry):
 
 @nb.njit(cache=True, inline="always")
 def jaumann_elastic_3d(stress, i, lg, lam, shear, dt):
-    """stress[i] += dt (lambda tr(D) I + 2 mu D + W sigma - sigma W) (Eq. 11, linear
-    elastic), D and W the symmetric and skew parts of the velocity gradient lg (9 values,
-    row-major); stress in Voigt order xx, yy, zz, xy, yz, zx."""
+    """stress[i] += dt (lambda tr(D) I + 2 mu D + W sigma - sigma W): the linear elastic
+    Jaumann rate of Eq. (11), D and W the symmetric and skew parts of the velocity
+    gradient.
+
+    Parameters
+    ----------
+    stress : (cap, 6) float64 array
+        effective stress (Pa), Voigt order xx, yy, zz, xy, yz, zx; row i is updated.
+    i : int
+        the particle's row.
+    lg : tuple of 9 float
+        velocity gradient L row-major (1/s).
+    lam, shear : float
+        Lame constants lambda and mu (Pa).
+    dt : float
+        time step (s).
+    """
     sxx, syy, szz = stress[i, 0], stress[i, 1], stress[i, 2]
     sxy, syz, szx = stress[i, 3], stress[i, 4], stress[i, 5]
     tr = lg[0] + lg[4] + lg[8]

@@ -1,5 +1,5 @@
-"""Matrix-free SPH Laplacian over the pairs recorded by `pair_sums`, for a pressure solve
-(issue 14).
+"""Matrix-free SPH Laplacian over the pairs recorded by `pair_sums`, for the pressure solve
+of the projection scheme.
 
     (L q)_i = sum_j V_j w_ij 2F_ij (q_j - q_i)
 
@@ -27,15 +27,31 @@ from psph.kernels.spline import dw_cubic, dw_cubic_dim
 
 
 def lattice_moment(dx: float, h: float, dim: int = 2) -> float:
-    """m0 = sum_j V_j (-W'(r_ij) / r_ij) y_ij^2 over a full square (cubic, dim = 3)
-    lattice of spacing dx:
-    the moment matrix M of Eq. (22) of an interior particle of the initial lattice is m0 I
-    (0.991 at h = 1.2 dx). Eq. (23) takes F~ with the normalised gradient M^-1 grad W; with
-    the plain gradient the Laplacian of a quadratic comes out m0 times too small, and the
-    consolidation with it (issue 14: Terzaghi +1 % of q at depth). The stress divergence
-    of Eq. (26) has the same factor: a uniform stress under a surface load q balanced m0 q.
+    """The lattice moment m0 = sum_j V_j (-W'(r_ij) / r_ij) y_ij^2 over a full square
+    (cubic, dim = 3) lattice: the moment matrix M of Eq. (22) of an interior particle of
+    the initial lattice is m0 I (0.991 at h = 1.2 dx).
+
+    Eq. (23) takes F~ with the normalised gradient M^-1 grad W; with the plain gradient the
+    Laplacian of a quadratic comes out m0 times too small, and the consolidation with it
+    (Terzaghi's excess pressure 1 % of q too high at depth). The stress divergence of
+    Eq. (26) has the same factor: a uniform stress under a surface load q balances m0 q.
     The Darcy sums, the stress divergence and the projection's operator and velocity
-    correction are divided by m0 (`Simulation._interactions`, `PressureSolve`)."""
+    correction are therefore divided by m0 (`Simulation._interactions`, `PressureSolve`).
+
+    Parameters
+    ----------
+    dx : float
+        lattice spacing (m).
+    h : float
+        smoothing length (m).
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    float
+        m0 (dimensionless).
+    """
     n = int(np.ceil(2.0 * h / dx))
     m = 0.0
     if dim == 2:
@@ -55,15 +71,49 @@ def lattice_moment(dx: float, h: float, dim: int = 2) -> float:
 
 
 def make_pair_weights(dim: int):
-    """`pair_weights` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
+    """`pair_weights` in `dim` = 2 or 3 dimensions (one source, `dims.py`).
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `pair_weights`.
+    """
 
     @nb.njit(cache=True)
     def pair_weights(n_pairs: int, pairs: np.ndarray, pair_g: np.ndarray, x: np.ndarray,
                      perm: np.ndarray, rho: np.ndarray, k_scale: float, rho_scale: float,
                      out: np.ndarray) -> None:
-        """out[k] = 2F_ab (k_scale kbar_ab + rho_scale / rhobar_ab) for recorded pair
-        k = (a, b), with 2F_ab = 2 r_ba . grad_a W_ab / |r_ba|^2 (> 0), kbar, rhobar
-        arithmetic means."""
+        """The pair weights out[k] = 2F_ab (k_scale kbar_ab + rho_scale / rhobar_ab) of
+        the recorded pairs k = (a, b), with 2F_ab = 2 r_ba . grad_a W_ab / |r_ba|^2 (> 0)
+        and kbar, rhobar arithmetic means.
+
+        Parameters
+        ----------
+        n_pairs : int
+            number of recorded pairs.
+        pairs : (>= n_pairs, 2) int64 array
+            the pairs (a, b) of `interactions.pair_sums`.
+        pair_g : (>= n_pairs, dim) float64 array
+            grad_a W_ab of each pair (1/m^(dim+1)).
+        x : (n, dim) float64 array
+            positions (m).
+        perm : (n,) float64 array
+            hydraulic conductivity k (m/s).
+        rho : (n,) float64 array
+            mixture density (kg/m^3).
+        k_scale : float
+            factor of the Darcy part: 1 / (m0 gamma_l) (m^3/N) for Eq. (29), m0 of
+            `lattice_moment`.
+        rho_scale : float
+            factor of the velocity-correction part: dt / m0 (s); 0 without it.
+        out : (>= n_pairs,) float64 array
+            receives the weights.
+        """
         for k in range(n_pairs):
             a = pairs[k, 0]
             b = pairs[k, 1]
@@ -90,10 +140,32 @@ def operator_coefficients(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag:
                           w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray,
                           c_diag: np.ndarray, c_off: np.ndarray, c_storage: np.ndarray,
                           diag: np.ndarray) -> None:
-    """The products of `apply_operator` that do not change during a solve: c_diag[k] =
-    V_a V_b w_diag[k], c_off[k] = V_a V_b w_off[k] and c_storage[i] = V_i s_i, computed once
+    """The products of `apply_operator` that do not change during a solve, computed once
     per solve for `apply_scaled` (the same roundings, so the same bits), and in the same
-    pass the diagonal of S (`operator_diagonal`, the Jacobi preconditioner) into diag."""
+    pass the diagonal of S (`operator_diagonal`, the Jacobi preconditioner).
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    n_pairs : int
+        number of recorded pairs.
+    pairs : (>= n_pairs, 2) int64 array
+        the recorded pairs (a, b).
+    w_diag, w_off : (>= n_pairs,) float64 arrays
+        the pairs' diagonal and off-diagonal weights (`pair_weights`,
+        `images.image_weights`).
+    vol : (n,) float64 array
+        particle volumes (m^3; m^2 per unit thickness in 2D).
+    storage : (n,) float64 array
+        storage s_i, n / (K_l dt) for the pressure (1/(Pa s)).
+    c_diag, c_off : (>= n_pairs,) float64 arrays
+        receive V_a V_b w_diag[k] and V_a V_b w_off[k].
+    c_storage : (>= n_owned,) float64 array
+        receives V_i s_i.
+    diag : (>= n_owned,) float64 array
+        receives the diagonal of S.
+    """
     for i in range(n_owned):
         c_storage[i] = vol[i] * storage[i]
         diag[i] = c_storage[i]
@@ -115,7 +187,21 @@ def apply_scaled(n_owned: int, n_pairs: int, pairs: np.ndarray, c_diag: np.ndarr
                  c_off: np.ndarray, c_storage: np.ndarray, fixed: np.ndarray, q: np.ndarray,
                  out: np.ndarray) -> None:
     """out[:n_owned] = S q from the coefficients of `operator_coefficients` (the operator
-    of `apply_operator`; the solve applies it every iteration)."""
+    of `apply_operator`; the solve applies it every iteration).
+
+    Parameters
+    ----------
+    n_owned, n_pairs, pairs
+        as `operator_coefficients`.
+    c_diag, c_off, c_storage : float64 arrays
+        the coefficients of `operator_coefficients`.
+    fixed : (n,) bool array
+        rows whose value is imposed.
+    q : (n,) float64 array
+        the operand (Pa), halo rows included.
+    out : (>= n_owned,) float64 array
+        receives S q.
+    """
     for i in range(n_owned):
         out[i] = c_storage[i] * q[i]
     for k in range(n_pairs):
@@ -142,7 +228,19 @@ def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.nda
     The row of a `fixed` particle is its own diagonal times q_i (scaled like a free row, so
     that one residual norm serves both); a free row keeps the diagonal part of a fixed
     neighbour j, and its coupling to q_j is moved to the right-hand side (`fixed_rhs`), so
-    S stays symmetric."""
+    S stays symmetric.
+
+    Parameters
+    ----------
+    n_owned, n_pairs, pairs, w_diag, w_off, vol, storage
+        as `operator_coefficients`.
+    fixed : (n,) bool array
+        rows whose value is imposed.
+    q : (n,) float64 array
+        the operand (Pa), halo rows included.
+    out : (>= n_owned,) float64 array
+        receives S q.
+    """
     c_diag = np.empty(n_pairs)
     c_off = np.empty(n_pairs)
     c_storage = np.empty(n_owned)
@@ -155,7 +253,15 @@ def apply_operator(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.nda
 def operator_diagonal(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
                       vol: np.ndarray, storage: np.ndarray, out: np.ndarray) -> None:
     """The diagonal of S, V_i s_i + sum_j V_i V_j w_diag_ij, for free and fixed rows alike
-    (the Jacobi preconditioner)."""
+    (the Jacobi preconditioner).
+
+    Parameters
+    ----------
+    n_owned, n_pairs, pairs, w_diag, vol, storage
+        as `operator_coefficients`.
+    out : (>= n_owned,) float64 array
+        receives the diagonal.
+    """
     for i in range(n_owned):
         out[i] = vol[i] * storage[i]
     for k in range(n_pairs):
@@ -173,7 +279,19 @@ def fixed_rhs(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
               w_off: np.ndarray, vol: np.ndarray, storage: np.ndarray, fixed: np.ndarray,
               value: np.ndarray, rhs: np.ndarray) -> None:
     """Right-hand side of the imposed values: a fixed row gets its diagonal times its
-    value, a free row the couplings w_off_ij value_j of its fixed neighbours."""
+    value, a free row the couplings w_off_ij value_j of its fixed neighbours.
+
+    Parameters
+    ----------
+    n_owned, n_pairs, pairs, w_diag, w_off, vol, storage
+        as `operator_coefficients`.
+    fixed : (n,) bool array
+        rows whose value is imposed.
+    value : (n,) float64 array
+        the imposed values (Pa), read on fixed rows.
+    rhs : (>= n_owned,) float64 array
+        the right-hand side, added to (fixed rows: set).
+    """
     for i in range(n_owned):
         if fixed[i]:
             rhs[i] = vol[i] * storage[i] * value[i]
@@ -195,7 +313,19 @@ def fixed_rhs(n_owned: int, n_pairs: int, pairs: np.ndarray, w_diag: np.ndarray,
 
 @nb.njit(cache=True, error_model="numpy")  # x / 0 -> inf as numpy, not an exception
 def jacobi(n: int, r: np.ndarray, diag: np.ndarray, u: np.ndarray) -> None:
-    """u = r / diag on the first n rows: the Jacobi preconditioner."""
+    """u = r / diag on the first n rows: the Jacobi preconditioner.
+
+    Parameters
+    ----------
+    n : int
+        number of rows.
+    r : (>= n,) float64 array
+        residual.
+    diag : (>= n,) float64 array
+        the diagonal of S (`operator_diagonal`).
+    u : (>= n,) float64 array
+        receives the preconditioned residual.
+    """
     for i in range(n):
         u[i] = r[i] / diag[i]
 
@@ -209,7 +339,27 @@ def cg_advance(n: int, alpha: float, beta: float, u: np.ndarray, w: np.ndarray,
     w = S u, so an iteration applies S once, to u; d = u and sd = w when beta = 0,
     whatever d and sd held), the step (x += alpha d, r -= alpha sd), then the Jacobi
     preconditioner (u = r / diag). One call instead of three, the same bits (a CG
-    iteration on several ranks is latency-bound, issue 36)."""
+    iteration on several ranks is latency-bound).
+
+    Parameters
+    ----------
+    n : int
+        number of rows.
+    alpha, beta : float
+        the CG step length and direction update (beta = 0: the first iteration).
+    u : (>= n,) float64 array
+        preconditioned residual; overwritten with the new one.
+    w : (>= n,) float64 array
+        S u.
+    d, sd : (>= n,) float64 arrays
+        search direction and S d, updated.
+    x : (>= n,) float64 array
+        the iterate (Pa), updated.
+    r : (>= n,) float64 array
+        residual, updated.
+    diag : (>= n,) float64 array
+        the diagonal of S.
+    """
     first = beta == 0.0
     for i in range(n):
         if first:

@@ -22,7 +22,20 @@ import numpy as np
 @nb.njit(cache=True, inline="always")
 def next_cell(cx, cy, cz, ncx, ncy):
     """The cell after (cx, cy, cz) in the global row-major order, x fastest (a sweep over
-    cells c = 0, 1, ... starts from (-1, 0, 0))."""
+    cells c = 0, 1, ... starts from (-1, 0, 0)).
+
+    Parameters
+    ----------
+    cx, cy, cz : int
+        the cell's coordinates on the local grid.
+    ncx, ncy : int
+        the grid's size along x and y.
+
+    Returns
+    -------
+    cx, cy, cz : int
+        the next cell's coordinates.
+    """
     cx += 1
     if cx == ncx:
         cx = 0
@@ -35,18 +48,43 @@ def next_cell(cx, cy, cz, ncx, ncy):
 
 def pair_cell_span(dim: int) -> int:
     """Cells of the pair sweep's grid across the 2h support: its cells have side 2h / span.
-    2D: 1 (side 2h). 3D: 2 (side h): on a lattice at h = 1.2 dx a particle's half
-    stencil then visits 93 candidates instead of 157 for the same 26 pairs
-    (`bench/diagnostics/pair_grid_candidates.py`), and the 3D sweep of the throughput
-    bench's block took 81 instead of 95 ms (issue 37). The other cell-list kernels
-    (Shepard, the boundary particles, non-local softening) keep cells of side 2h."""
+
+    2D: 1 (side 2h). 3D: 2 (side h): on a lattice at h = 1.2 dx a particle's half stencil
+    then visits 93 candidates instead of 157 for the same 26 pairs
+    (`bench/diagnostics/pair_grid_candidates.py`), and the 3D sweep takes 15 % less time.
+    The other cell-list kernels (Shepard, the boundary particles, non-local softening)
+    keep cells of side 2h.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    int
+        span.
+    """
     return 1 if dim == 2 else 2
 
 
 @nb.njit(cache=True, inline="always")
 def half_stencil_rows(dim: int, span: int = 1) -> int:
-    """Slot ranges r of `forward_slots` to visit: 1 + span in 2D, 1 + span + span (2 span
-    + 1) in 3D (2 and 5 at span 1, 13 in 3D at span 2)."""
+    """The number of slot runs of `forward_slots` to visit.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+    span : int
+        cells across 2h (`pair_cell_span`).
+
+    Returns
+    -------
+    int
+        1 + span in 2D, 1 + span + span (2 span + 1) in 3D (2 and 5 at span 1, 13 in 3D
+        at span 2).
+    """
     return 1 + span if dim == 2 else 1 + span + span * (2 * span + 1)
 
 
@@ -60,7 +98,32 @@ def forward_slots(r, c, sa, cx, cy, cz, ncx, ncy, ncz, cell_start, dim, span=1):
     ones the rows (-span..+span, -span..+span, +1..+span), y fastest: the half stencil's
     cells (the comment above) in the global cell order, with one bounds check per row
     instead of one per cell (tests/test_kernels_3d.py checks the runs against the
-    offsets)."""
+    offsets).
+
+    Parameters
+    ----------
+    r : int
+        the run, 0 <= r < `half_stencil_rows(dim, span)`.
+    c : int
+        the cell's index.
+    sa : int
+        the particle's slot in the cell list.
+    cx, cy, cz : int
+        the cell's coordinates.
+    ncx, ncy, ncz : int
+        the grid's size (ncz = 1 in 2D).
+    cell_start : int64 array
+        the cell list's slot offsets per cell.
+    dim : int
+        2 or 3.
+    span : int
+        cells across 2h.
+
+    Returns
+    -------
+    s0, s1 : int
+        the run of slots [s0, s1).
+    """
     xlo = cx - span if cx >= span else 0
     xhi = cx + span if cx < ncx - span else ncx - 1
     if r == 0:
@@ -90,7 +153,19 @@ def _clamped_cell(c, origin, cell_size, lo, hi):
 
 @nb.njit(cache=True)
 def gather_sorted(x, order, n, out):
-    """out[s] = x[order[s]] for slots s < n: positions in the cell list's slot order."""
+    """out[s] = x[order[s]] for slots s < n: positions in the cell list's slot order.
+
+    Parameters
+    ----------
+    x : (cap, dim) float64 array
+        positions (m).
+    order : (cap,) int64 array
+        the cell list's rows in slot order.
+    n : int
+        number of slots.
+    out : (>= n, dim) float64 array
+        receives the sorted positions (m).
+    """
     for s in range(n):
         o = order[s]
         for d in range(x.shape[1]):
@@ -99,8 +174,20 @@ def gather_sorted(x, order, n, out):
 
 @nb.njit(cache=True)
 def count_owned(order, n, n_owned, out):
-    """out[s] = how many of slots 0..s-1 hold owned rows (order[.] < n_owned), s <= n:
-    a run of slots [s0, s1) holds an owned row iff out[s1] > out[s0]."""
+    """out[s] = how many of slots 0..s-1 hold owned rows, s <= n: a run of slots [s0, s1)
+    holds an owned row iff out[s1] > out[s0].
+
+    Parameters
+    ----------
+    order : (cap,) int64 array
+        the cell list's rows in slot order.
+    n : int
+        number of slots.
+    n_owned : int
+        rows below it are owned.
+    out : (>= n + 1,) int64 array
+        receives the counts.
+    """
     out[0] = 0
     for s in range(n):
         out[s + 1] = out[s] + (1 if order[s] < n_owned else 0)
@@ -110,12 +197,33 @@ def count_owned(order, n, n_owned, out):
 def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, fill, order):
     """Counting sort of particles 0..n-1 into cells, then insertion sort by key in a cell.
 
-    x: (cap, dim) positions; key: (cap,) global sort keys; origin: (dim,) global grid
-    origin; lo: (dim,) int64 lowest local cell coordinates; ncell: (dim,) int64 local grid
-    size. Outputs (preallocated): cell_of (cap,), cell_start (>= prod(ncell) + 1,), fill
-    (>= prod(ncell),) scratch, order (cap,).
     Particles outside the local grid (only possible after one left the domain, which the
     update reports as a failure) are clamped into its edge cells.
+
+    Parameters
+    ----------
+    x : (cap, dim) float64 array
+        positions (m).
+    key : (cap,) float64 array
+        global sort keys (the particles' ids).
+    n : int
+        number of particles.
+    origin : (dim,) float64 array
+        the global grid's origin (m).
+    cell_size : float
+        cell side (m).
+    lo : (dim,) int64 array
+        lowest local cell coordinates (`grid_bounds`).
+    ncell : (dim,) int64 array
+        local grid size.
+    cell_of : (cap,) int64 array
+        receives each particle's cell.
+    cell_start : (>= prod(ncell) + 1,) int64 array
+        receives each cell's first slot.
+    fill : (>= prod(ncell),) int64 array
+        scratch.
+    order : (cap,) int64 array
+        receives the rows in slot order.
     """
     three = x.shape[1] == 3
     ncx = ncell[0]
@@ -157,9 +265,25 @@ def bin_particles(x, key, n, origin, cell_size, lo, ncell, cell_of, cell_start, 
 
 @nb.njit(cache=True)
 def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
-    """Lowest cell coordinates `lo` and grid size `ncell` covering particles 0..n-1, with a
-    one-cell margin, cell coordinates limited to [0, cmax] (the domain's grid); each
-    (dim,), dim = x.shape[1]."""
+    """The local grid covering particles 0..n-1, with a one-cell margin.
+
+    Parameters
+    ----------
+    x : (cap, dim) float64 array
+        positions (m).
+    n : int
+        number of particles.
+    origin : (dim,) float64 array
+        the global grid's origin (m).
+    cell_size : float
+        cell side (m).
+    cmax : (dim,) int64 array
+        the domain grid's size: cell coordinates are limited to [0, cmax].
+    lo : (dim,) int64 array
+        receives the lowest cell coordinates.
+    ncell : (dim,) int64 array
+        receives the grid size.
+    """
     three = x.shape[1] == 3
     if n == 0:
         for d in range(x.shape[1]):
@@ -191,9 +315,28 @@ def grid_bounds(x, n, origin, cell_size, cmax, lo, ncell):
 @nb.njit(cache=True)
 def neighbour_pairs(n, x, h, cell_start, order, ncell, pairs, span=1):
     """The pairs (a, b) of particles 0..n-1 closer than 2h, each once, in the half-stencil
-    order of the pair sweeps (2D or 3D, by x.shape[1]) on cells of side 2h / span (the
-    sweep's: `pair_cell_span`) into pairs (m, 2) int64; returns their number, or -1 if m
-    rows are not enough."""
+    order of the pair sweeps (2D or 3D, by x.shape[1]).
+
+    Parameters
+    ----------
+    n : int
+        number of particles.
+    x : (cap, dim) float64 array
+        positions (m).
+    h : float
+        smoothing length (m).
+    cell_start, order, ncell : int64 arrays
+        a cell list with cells of side 2h / span.
+    pairs : (m, 2) int64 array
+        receives the pairs.
+    span : int
+        cells across 2h (the sweep's: `pair_cell_span`).
+
+    Returns
+    -------
+    int
+        the number of pairs, or -1 if m rows are not enough.
+    """
     dim = x.shape[1]
     ncx = ncell[0]
     ncy = ncell[1]
@@ -231,23 +374,58 @@ def neighbour_pairs(n, x, h, cell_start, order, ncell, pairs, span=1):
 
 def cell_lists(x: np.ndarray, h: float, key: np.ndarray | None = None,
                span: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(cell_start, order, ncell) of a whole particle set (2D or 3D) in one go, cells of side
-    2h / span (span 1: the cell-list kernels' layout; `pair_cell_lists` for the pair
-    sweep's); for verification drivers and tests, not the time loop, which keeps its
-    arrays. key: the sort key within a cell (default: the index)."""
+    """The cell list of a whole particle set (2D or 3D) in one go, for verification drivers
+    and tests (the time loop keeps its own arrays).
+
+    Parameters
+    ----------
+    x : (n, dim) float64 array
+        positions (m).
+    h : float
+        smoothing length (m).
+    key : (n,) float64 array, optional
+        the sort key within a cell (default: the index).
+    span : int
+        cells across 2h: 1 for the cell-list kernels' layout (`pair_cell_lists` for the
+        pair sweep's).
+
+    Returns
+    -------
+    cell_start, order, ncell : int64 arrays
+    """
     return cell_lists_indexed(x, h, key, span)[1:]
 
 
 def pair_cell_lists(x: np.ndarray, h: float, key: np.ndarray | None = None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`cell_lists` in the pair sweep's layout (`pair_cell_span`: cells of side h in 3D)."""
+    """`cell_lists` in the pair sweep's layout (`pair_cell_span`: cells of side h in 3D).
+
+    Parameters
+    ----------
+    x, h, key
+        as `cell_lists`.
+
+    Returns
+    -------
+    cell_start, order, ncell : int64 arrays
+    """
     return cell_lists(x, h, key, pair_cell_span(x.shape[1]))
 
 
 def cell_lists_indexed(x: np.ndarray, h: float, key: np.ndarray | None = None,
                        span: int = 1
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(cell_of, cell_start, order, ncell): `cell_lists` with each particle's cell."""
+    """`cell_lists` with each particle's cell.
+
+    Parameters
+    ----------
+    x, h, key, span
+        as `cell_lists`.
+
+    Returns
+    -------
+    cell_of, cell_start, order, ncell : int64 arrays
+    """
     n, dim = x.shape
     key = np.arange(n, dtype=float) if key is None else key
     cs = 2 * h / span

@@ -1,5 +1,5 @@
 """Non-local (integral-averaged) equivalent plastic strain for the softening laws of
-Eq. (17)-(19) (issue 17, item 1: `material.plasticity.regularisation`).
+Eq. (17)-(19) of Lian et al. (2023) (`material.plasticity.regularisation`).
 
 With a local softening law the plastic strain of a shear band concentrates in one row of
 particles, so the energy the band dissipates scales with dx. Here the softening of
@@ -15,10 +15,10 @@ length of the material in metres, independent of dx; the sum runs over the real 
 and over their mirror images across the walls (free-slip and fixed planes of
 `boundaries`; across two walls of different axes at a corner), as the wall ghosts
 continue every other field. Without the images the support of a particle on a wall is
-one-sided: a band along the wall (a slide's basal row) had eps_bar about eps_p / 2, so
-eps_hat = 2 eps_bar - eps_p was clipped to 0 and the band never softened (its psi stayed
-psi_0 and a contractive row compacted to n = 0; README, issue 17). With them a band on a
-wall is the half of a band symmetric about it. The weights are sum-normalised, so a
+one-sided: a band along the wall (a slide's basal row) has eps_bar about eps_p / 2, so
+eps_hat = 2 eps_bar - eps_p is clipped to 0 and the band never softens (psi stays psi_0,
+and a contractive row compacts to n = 0). With them a band
+on a wall is the half of a band symmetric about it. The weights are sum-normalised, so a
 constant field is reproduced exactly; they are symmetric, so a linear field is
 reproduced where the support is full (and lies off the walls).
 m >= 1: m = 1 the plain non-local average; m > 1 weights the average above the local
@@ -28,8 +28,8 @@ the return mapping's increments (`update.advance`).
 
 One source for 2D and 3D (`make_nonlocal_strain(dim)`, `dims.py`): in 3D the cells are
 searched layer by layer in z too, and the images are those across each wall, across two
-walls of different axes (an edge) and across three (a corner); the 2D kernel keeps the
-operations of the 2D code before 3D, so its bits.
+walls of different axes (an edge) and across three (a corner); the 2D specialisation
+performs the plane-strain operations in their order, so its bits do not depend on 3D.
 """
 
 import math
@@ -40,12 +40,45 @@ from psph.kernels.spline import w_cubic_dim
 
 
 def make_nonlocal_strain(dim: int):
-    """`nonlocal_strain` in `dim` = 2 or 3 dimensions."""
+    """`nonlocal_strain` in `dim` = 2 or 3 dimensions.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `nonlocal_strain`.
+    """
 
     @nb.njit(cache=True, inline="always")
     def image_weight(x, i, j, axes, pos, count, vol_j, lc):
-        """V_j W(|x_i - image of x_j|, l_c) for the image of j across the `count` walls
-        x[axes[k]] = pos[k] (distinct axes); 0 beyond the support."""
+        """The weight V_j W(|x_i - x_j*|, l_c) of the image x_j* of j across `count` walls.
+
+        Parameters
+        ----------
+        x : (cap, dim) float64 array
+            positions (m).
+        i, j : int
+            the particle and the image's source.
+        axes : int64 array
+            the walls' normal axes (distinct), first `count` used.
+        pos : float64 array
+            the walls' positions x[axes[k]] = pos[k] (m).
+        count : int
+            number of walls, 1 to 3.
+        vol_j : float
+            the source's volume (m^3; m^2 in 2D).
+        lc : float
+            internal length l_c (m).
+
+        Returns
+        -------
+        float
+            the weight (dimensionless); 0 beyond the support 2 l_c.
+        """
         d0 = x[j, 0] - x[i, 0]
         d1 = x[j, 1] - x[i, 1]
         d2 = x[j, 2] - x[i, 2] if dim == 3 else 0.0
@@ -67,22 +100,45 @@ def make_nonlocal_strain(dim: int):
     def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
                         cell_start, order, ncell, rings, plastic_cell, wall_axis, wall_pos,
                         out):
-        """out[i] = eps_hat_i of particles 0..n_owned-1 (module docstring).
+        """The over-non-local strain eps_hat_i of particles 0..n_owned-1 (module docstring).
 
-        wall_axis, wall_pos: the walls x[axis] = pos whose images enter the sums (empty:
-        none). An image of j lies no closer to i than j itself (both on the soil's side),
-        so the cells that hold the real particles within 2 l_c hold every image's source
-        too.
-
-        lengths[k], weights[k]: l_c (m) and m of material k (l_c = 0: local, out = eps_p);
-        cell_of, cell_start, order, ncell: the step's cell lists (cells of side 2h,
-        particles in key order in a cell); rings: cells to search on each side, >= 2 max
-        l_c / (2h); plastic_cell: scratch of at least prod(ncell) entries.
+        An image of j lies no closer to i than j itself (both on the soil's side), so the
+        cells that hold the real particles within 2 l_c hold every image's source too.
         Each sum visits the cells row by row in the global numbering and a cell in key
         order: the same particles in the same order on any number of ranks (bitwise 1 vs
         N, with a halo of at least 2 l_c). A particle with no plastic strain in the cells
         it searches keeps eps_hat = eps_p = 0 without the sum (which would give exactly
-        that): the sums run only where something has yielded within the support."""
+        that): the sums run only where something has yielded within the support.
+
+        Parameters
+        ----------
+        n_owned : int
+            owned rows 0..n_owned-1.
+        n_real : int
+            rows 0..n_real-1 are real particles (owned and halo); boundary rows follow.
+        x : (cap, dim) float64 array
+            positions (m).
+        vol : (cap,) float64 array
+            particle volumes (m^3; m^2 per unit thickness in 2D).
+        eps_p : (cap,) float64 array
+            local equivalent plastic strain (dimensionless).
+        material : (cap,) array
+            each particle's material index.
+        lengths, weights : (n_materials,) float64 arrays
+            l_c (m) and m of each material (l_c = 0: local, out = eps_p).
+        cell_of, cell_start, order, ncell : int64 arrays
+            the step's cell lists (cells of side 2h, particles in key order in a cell).
+        rings : int
+            cells to search on each side, >= 2 max l_c / (2h) (`rings_for`).
+        plastic_cell : int64 array
+            scratch of at least prod(ncell) entries.
+        wall_axis : int64 array
+            normal axes of the walls whose images enter the sums (empty: none).
+        wall_pos : float64 array
+            their positions (m).
+        out : (>= n_owned,) float64 array
+            receives eps_hat (dimensionless, >= 0).
+        """
         ncx = ncell[0]
         ncy = ncell[1]
         ncz = ncell[2] if dim == 3 else 1
@@ -179,5 +235,18 @@ nonlocal_strain_3d = make_nonlocal_strain(3)
 
 
 def rings_for(length: float, cell_size: float) -> int:
-    """Cells to search on each side for a support of 2 l_c (at least 1)."""
+    """Cells to search on each side for a support of 2 l_c.
+
+    Parameters
+    ----------
+    length : float
+        internal length l_c (m).
+    cell_size : float
+        cell side (m).
+
+    Returns
+    -------
+    int
+        ceil(2 l_c / cell_size), at least 1.
+    """
     return max(1, math.ceil(2.0 * length / cell_size))

@@ -10,7 +10,19 @@ import numpy as np
 
 @nb.njit(cache=True)
 def pack_rows(fields, idx, count, out):
-    """out[r, :] = concatenation of fields[f][idx[r], :] for r < count."""
+    """out[r, :] = the concatenation of fields[f][idx[r], :] for r < count.
+
+    Parameters
+    ----------
+    fields : tuple of (cap, ncomp) float64 arrays
+        the fields, in SI units.
+    idx : int64 array
+        rows to pack.
+    count : int
+        number of rows.
+    out : (>= count, sum of ncomp) float64 array
+        the message buffer.
+    """
     for r in range(count):
         i = idx[r]
         col = 0
@@ -22,7 +34,19 @@ def pack_rows(fields, idx, count, out):
 
 @nb.njit(cache=True)
 def unpack_rows(buf, count, fields, start):
-    """fields[f][start + r, :] = the matching columns of buf[r, :] for r < count."""
+    """fields[f][start + r, :] = the matching columns of buf[r, :] for r < count.
+
+    Parameters
+    ----------
+    buf : (>= count, sum of ncomp) float64 array
+        the message buffer (`pack_rows`).
+    count : int
+        number of rows.
+    fields : tuple of (cap, ncomp) float64 arrays
+        the fields.
+    start : int
+        first row written.
+    """
     for r in range(count):
         col = 0
         for f in fields:
@@ -33,8 +57,17 @@ def unpack_rows(buf, count, fields, start):
 
 @nb.njit(cache=True)
 def compact_rows(fields, keep, count):
-    """fields[f][r, :] = fields[f][keep[r], :] for r < count, in place; keep is increasing,
-    so no row is read after it is overwritten."""
+    """fields[f][r, :] = fields[f][keep[r], :] for r < count, in place.
+
+    Parameters
+    ----------
+    fields : tuple of (cap, ncomp) float64 arrays
+        the fields.
+    keep : int64 array
+        rows to keep, increasing (so no row is read after it is overwritten).
+    count : int
+        number of rows kept.
+    """
     for f in fields:
         for r in range(count):
             i = keep[r]
@@ -45,8 +78,26 @@ def compact_rows(fields, keep, count):
 
 @nb.njit(cache=True)
 def split_by_owner(owner, n, me, keep, leave, leave_dest):
-    """Rows 0..n-1 by their owner rank: keep[:nk] those of rank `me`, leave[:nl] the others
-    with leave_dest[:nl] their owners, both in row order. Returns (nk, nl)."""
+    """Rows 0..n-1 by their owner rank, in row order.
+
+    Parameters
+    ----------
+    owner : int64 array
+        each row's owner rank.
+    n : int
+        number of rows.
+    me : int
+        this rank.
+    keep : int64 array
+        receives the rows of rank `me`.
+    leave, leave_dest : int64 arrays
+        receive the other rows and their owners.
+
+    Returns
+    -------
+    nk, nl : int
+        the numbers kept and leaving.
+    """
     nk = nl = 0
     for i in range(n):
         r = owner[i]
@@ -62,9 +113,22 @@ def split_by_owner(owner, n, me, keep, leave, leave_dest):
 
 @nb.njit(cache=True)
 def group_by_rank(dest, rows, m, counts, grouped):
-    """A counting sort of rows[:m] by their ranks dest[:m] into grouped[:m], row order
-    kept within a rank (the order of rows[argsort(dest, kind="stable")]); counts[r] = how
-    many go to rank r."""
+    """A counting sort of rows by destination rank, row order kept within a rank (the
+    order of rows[argsort(dest, kind="stable")]).
+
+    Parameters
+    ----------
+    dest : int64 array
+        each row's destination rank.
+    rows : int64 array
+        the rows.
+    m : int
+        number of rows.
+    counts : (n_ranks,) int64 array
+        receives how many go to each rank.
+    grouped : int64 array
+        receives the rows grouped by rank.
+    """
     counts[:] = 0
     for k in range(m):
         counts[dest[k]] += 1
@@ -84,10 +148,28 @@ def select_slab_rows(coord, n, lo, hi, width, is_first, is_last, migr_down, migr
                      halo_down, halo_up, keep):
     """Classify owned particles 0..n-1 against the slab [lo, hi) along one axis.
 
-    Fills index lists and returns (n_migr_down, n_migr_up, n_halo_down, n_halo_up, n_keep):
-    particles below lo (above hi) migrate to the lower (upper) rank; of the rest, those
+    Particles below lo (above hi) migrate to the lower (upper) rank; of the rest, those
     within `width` of a cut are halo for that neighbour. The first/last rank keeps what
     is beyond its outer end.
+
+    Parameters
+    ----------
+    coord : float64 array
+        the particles' coordinates along the slab axis (m).
+    n : int
+        number of owned particles.
+    lo, hi : float
+        the slab's bounds (m).
+    width : float
+        halo width (m).
+    is_first, is_last : bool
+        the slab is the first / last along the axis.
+    migr_down, migr_up, halo_down, halo_up, keep : int64 arrays
+        receive the index lists.
+
+    Returns
+    -------
+    n_migr_down, n_migr_up, n_halo_down, n_halo_up, n_keep : int
     """
     nmd = nmu = nhd = nhu = nk = 0
     for i in range(n):
@@ -112,9 +194,24 @@ def select_slab_rows(coord, n, lo, hi, width, is_first, is_last, migr_down, migr
 
 @nb.njit(cache=True)
 def box_owners(x, n, a0, a1, cuts0, cuts1, owner):
-    """owner[i] = the rank of the box holding row i < n of a two-axis layout: slab s
-    along axis a0 (cuts0, (n0 + 1,), outer cuts -inf and +inf), then box b of that slab
-    along a1 (cuts1[s], (n1 + 1,)); rank = s n1 + b."""
+    """The owner rank of each row in a two-axis layout: slab s along axis a0, then box b
+    of that slab along a1; rank = s n1 + b.
+
+    Parameters
+    ----------
+    x : (cap, dim) float64 array
+        positions (m).
+    n : int
+        number of rows.
+    a0, a1 : int
+        the two axes.
+    cuts0 : (n0 + 1,) float64 array
+        the slabs' cuts along a0 (m), outer cuts -inf and +inf.
+    cuts1 : (n0, n1 + 1) float64 array
+        each slab's cuts along a1 (m).
+    owner : int64 array
+        receives the ranks.
+    """
     n1 = cuts1.shape[1] - 1
     for i in range(n):
         s = np.searchsorted(cuts0[1:-1], x[i, a0], side="right")
@@ -126,8 +223,24 @@ def box_owners(x, n, a0, a1, cuts0, cuts1, owner):
 def box_halo(x, n, a0, a1, cuts0, cuts1, width, me, dest, rows):
     """The halo of rows 0..n-1 (all owned by rank `me`) in a two-axis layout
     (`box_owners`): each (rank, row) with the row within `width` of that rank's box along
-    both axes (edges and corners included), rank != me, in dest[:m], rows[:m] in row
-    order. Returns m, or -m if dest is too short."""
+    both axes (edges and corners included), rank != me, in row order.
+
+    Parameters
+    ----------
+    x, n, a0, a1, cuts0, cuts1
+        as `box_owners`.
+    width : float
+        halo width (m).
+    me : int
+        this rank.
+    dest, rows : int64 arrays
+        receive the (rank, row) entries.
+
+    Returns
+    -------
+    int
+        the number m of entries, or -m if dest is too short.
+    """
     n1 = cuts1.shape[1] - 1
     m = 0
     cap = dest.shape[0]

@@ -1,23 +1,23 @@
-"""Drucker-Prager strain-softening plasticity (Section 2.2), per particle, in 3D and in
-plane strain.
+"""Drucker-Prager strain-softening plasticity (Section 2.2 of Lian et al. 2023), per
+particle, in 3D and in plane strain.
 
 Stress components (xx, yy, zz, xy, yz, zx), effective, tension positive; plane strain is
-the case yz = zx = 0 (`dp_return`, the same bits as before the 3D components: they only
-add zeros to J2). Yield function Eq. (14)
-f = xi_phi I1 + sqrt(J2) - kappa_c and plastic potential Eq. (15) g = xi_psi I1 +
-sqrt(J2), with the plane-strain constants of Eq. (16) (or, with `mohr_coulomb`, the cone
-through Mohr-Coulomb at each trial stress's Lode angle: `mc_constants`, issue 37) and the
-softening laws of Eq. (17)-(19) in the equivalent plastic strain. The return mapping is
-the semi-implicit one of Bui et al. (2008) (the paper's ref. [3]): one plastic corrector
-with the multiplier of Eq. (13), then the tension-cracking treatment at the apex and the
-scaling back of the deviator onto the surface, so that no state ends outside it and none
-is NaN.
-An optional tension cut-off (`plasticity.tension_cutoff`, issue 13) caps the mean
-effective stress at t below the apex c cot(phi) with the same shift: without it a
-contractive soil (psi < 0) at low confinement flows undrained until sigma'_m is tensile
-up to the apex and p exceeds the total stress (README, "Pore pressure through failure").
+the case yz = zx = 0 (`dp_return`: the zero components add nothing to J2). Yield function
+Eq. (14) f = xi_phi I1 + sqrt(J2) - kappa_c and plastic potential Eq. (15)
+g = xi_psi I1 + sqrt(J2), with the plane-strain constants of Eq. (16) or, with
+`mohr_coulomb`, the cone through Mohr-Coulomb at each trial stress's Lode angle
+(`mc_constants`: in 3D the plane-strain cone is a third weaker in triaxial compression),
+and the softening laws of Eq. (17)-(19) in the equivalent plastic strain. The return
+mapping is the semi-implicit one of Bui et al. (2008): one plastic corrector with the
+multiplier of Eq. (13), then the tension-cracking treatment at the apex and the scaling
+back of the deviator onto the surface, so that no state ends outside it and none is NaN.
+
+An optional tension cut-off (`plasticity.tension_cutoff`) caps the mean effective stress
+at t below the apex c cot(phi) with the same shift: without it a contractive soil
+(psi < 0) at low confinement flows undrained until sigma'_m is tensile up to the apex,
+moving its total stress onto the water, and p exceeds the total stress.
 The strain that softens Eq. (17)-(19) is the particle's own eps_p (the local law) or, with
-`plasticity.regularisation`, the over-non-local strain of `nonlocal_strain.py` (issue 17);
+`plasticity.regularisation`, the over-non-local strain of `nonlocal_strain.py`;
 `dp_return` returns the local increment either way.
 """
 
@@ -30,7 +30,22 @@ SQRT3 = math.sqrt(3.0)
 
 @nb.njit(cache=True, inline="always")
 def dp_constants(phi, c):
-    """(xi, kappa) of Eq. (16) for friction angle phi (rad) and cohesion c (Pa)."""
+    """The plane-strain Drucker-Prager constants of Eq. (16).
+
+    Parameters
+    ----------
+    phi : float
+        friction (or dilatancy) angle (rad).
+    c : float
+        cohesion (Pa).
+
+    Returns
+    -------
+    xi : float
+        xi_phi (dimensionless).
+    kappa : float
+        kappa_c (Pa).
+    """
     t = math.tan(phi)
     d = math.sqrt(9.0 + 12.0 * t * t)
     return t / d, 3.0 * c / d
@@ -43,16 +58,48 @@ def mc_constants(phi, c, sin_t, cos_t):
     I1 sin(phi) / 3 + sqrt(J2) a - c cos(phi) = 0 with a = cos(theta) - sin(theta)
     sin(phi) / sqrt(3), divided by a. The apex kappa / xi = 3 c cot(phi) for every theta;
     at theta = 0 xi = sin(phi) / 3, near Eq. (16)'s plane-strain fit; at +30 deg the
-    compression cone."""
+    compression cone.
+
+    Parameters
+    ----------
+    phi : float
+        friction (or dilatancy) angle (rad).
+    c : float
+        cohesion (Pa).
+    sin_t, cos_t : float
+        sine and cosine of the Lode angle theta (`lode_sin_cos`).
+
+    Returns
+    -------
+    xi : float
+        dimensionless.
+    kappa : float
+        Pa.
+    """
     a = cos_t - sin_t * math.sin(phi) / SQRT3
     return math.sin(phi) / (3.0 * a), c * math.cos(phi) / a
 
 
 @nb.njit(cache=True, inline="always")
 def lode_sin_cos(dxx, dyy, dzz, sxy, syz, szx, j2):
-    """(sin theta, cos theta) of the deviator's Lode angle, sin(3 theta) =
-    -(3 sqrt(3) / 2) J3 / J2^(3/2) (tension positive: +30 deg is triaxial compression);
-    theta = 0 where sqrt(J2) vanishes (the apex, where the cone's theta does not matter)."""
+    """The Lode angle theta of a deviator, sin(3 theta) = -(3 sqrt(3) / 2) J3 / J2^(3/2)
+    (tension positive: +30 deg is triaxial compression).
+
+    Parameters
+    ----------
+    dxx, dyy, dzz : float
+        the deviator's diagonal (Pa).
+    sxy, syz, szx : float
+        the shear components (Pa).
+    j2 : float
+        J2 (Pa^2).
+
+    Returns
+    -------
+    sin_t, cos_t : float
+        sin(theta), cos(theta); theta = 0 where J2 vanishes (the apex, where the cone's
+        theta does not matter).
+    """
     if not j2 > 0.0:
         return 0.0, 1.0
     j3 = dxx * (dyy * dzz - syz * syz) - sxy * (sxy * dzz - syz * szx) \
@@ -64,7 +111,28 @@ def lode_sin_cos(dxx, dyy, dzz, sxy, syz, szx, j2):
 
 @nb.njit(cache=True, inline="always")
 def softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f):
-    """(phi, c, psi) after softening, Eq. (17)-(19)."""
+    """The strength parameters after softening, Eq. (17)-(19).
+
+    Parameters
+    ----------
+    eps_p : float
+        equivalent plastic strain (dimensionless).
+    phi_p, phi_r : float
+        peak and residual friction angles (rad).
+    c_p, c_r : float
+        peak and residual cohesion (Pa).
+    psi0 : float
+        initial dilatancy angle (rad).
+    eta : float
+        softening rate of phi and c (dimensionless).
+    s_f : float
+        decay rate of psi (dimensionless).
+
+    Returns
+    -------
+    phi, c, psi : float
+        rad, Pa, rad.
+    """
     decay = math.exp(-eta * eps_p)
     return (phi_r + (phi_p - phi_r) * decay, c_r + (c_p - c_r) * decay,
             psi0 * math.exp(-s_f * eps_p))
@@ -84,8 +152,21 @@ def _invariants(sxx, syy, szz, sxy, syz, szx):
 @nb.njit(cache=True)
 def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
               s_f, tension=math.inf, eps_dilation=-1.0, mohr_coulomb=False):
-    """`dp_return_3d` in plane strain (yz = zx = 0): (sxx, syy, szz, sxy, d_lambda,
-    d_eps_p, d_w)."""
+    """`dp_return_3d` in plane strain (yz = zx = 0).
+
+    Parameters
+    ----------
+    sxx, syy, szz, sxy : float
+        the elastic trial effective stress (Pa).
+    eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta, s_f, tension, eps_dilation,
+    mohr_coulomb
+        as `dp_return_3d`.
+
+    Returns
+    -------
+    tuple
+        (sxx, syy, szz, sxy, d_lambda, d_eps_p, d_w), as `dp_return_3d`.
+    """
     r = dp_return_3d(sxx, syy, szz, sxy, 0.0, 0.0, eps_p, bulk, shear, phi_p, phi_r, c_p,
                      c_r, psi0, eta, s_f, tension, eps_dilation, mohr_coulomb)
     return r[0], r[1], r[2], r[3], r[6], r[7], r[8]
@@ -96,18 +177,11 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
                  psi0, eta, s_f, tension=math.inf, eps_dilation=-1.0, mohr_coulomb=False):
     """Return the trial stress to the Drucker-Prager surface.
 
-    Returns (sxx, syy, szz, sxy, syz, szx, d_lambda, d_eps_p, d_w): the corrected stress, the
-    plastic multiplier of Eq. (13), the increment of the equivalent plastic strain
-    d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain = d_lambda / sqrt(3),
-    and the plastic work increment d_w = sigma : d eps_p (J/m^3, `plastic_work`).
     A trial state with f <= 0 and sigma'_m <= tension is returned unchanged (d_lambda = 0,
-    d_w = 0); tension (Pa): the tension cut-off of the mean effective stress, inf: none
-    (the apex c cot(phi) of Eq. 14 bounds it). Inside the cone but above the cut-off only
-    the mean moves (d_lambda = 0); where the Eq. (13) return would end above the cut-off
-    (the corner) the mean goes to the cut-off and d_lambda returns the deviator alone.
-    d_w counts the cone's flow, not the cut-off's own volume change (exact at t = 0).
-    eps_dilation >= 0: the strain whose Eq. (19) decays psi, the particle's own eps_p when
-    eps_p here is the regularised one (`update.advance`); < 0: eps_p, as for phi and c.
+    d_w = 0). Inside the cone but above the cut-off only the mean moves (d_lambda = 0);
+    where the Eq. (13) return would end above the cut-off (the corner) the mean goes to
+    the cut-off and d_lambda returns the deviator alone. d_w counts the cone's flow, not
+    the cut-off's own volume change (exact at t = 0).
 
     Eq. (13) with a:D:b = 9 K xi_phi xi_psi + G for Eq. (14)-(15), and the softening term
     with the sign that keeps f = 0 to first order after the update (softening makes
@@ -122,6 +196,35 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
     is the weaker by a third (phi = 30 deg: xi 0.160 against 0.231). The flow stays
     radial in the deviatoric plane (it ignores d a / d theta), so psi = phi is not the
     associated Mohr-Coulomb flow.
+
+    Parameters
+    ----------
+    sxx, syy, szz, sxy, syz, szx : float
+        the elastic trial effective stress (Pa, tension positive).
+    eps_p : float
+        the equivalent plastic strain that softens phi and c (dimensionless): the
+        particle's own or the regularised one.
+    bulk, shear : float
+        bulk modulus K and shear modulus G (Pa).
+    phi_p, phi_r, c_p, c_r, psi0, eta, s_f
+        the softening parameters of Eq. (17)-(19), as `softened` (rad, Pa).
+    tension : float
+        tension cut-off of the mean effective stress (Pa); inf: none (the apex
+        c cot(phi) of Eq. 14 bounds it).
+    eps_dilation : float
+        >= 0: the strain whose Eq. (19) decays psi, the particle's own eps_p when eps_p
+        here is the regularised one (`update.advance`); < 0: eps_p, as for phi and c.
+    mohr_coulomb : bool
+        the Lode-dependent cone (above) instead of Eq. (16).
+
+    Returns
+    -------
+    tuple
+        (sxx, syy, szz, sxy, syz, szx, d_lambda, d_eps_p, d_w): the corrected stress (Pa),
+        the plastic multiplier of Eq. (13), the increment of the equivalent plastic
+        strain d_eps_p = sqrt(2/3 de_p:de_p) of the deviatoric plastic strain
+        = d_lambda / sqrt(3), and the plastic work increment d_w = sigma : d eps_p
+        (J/m^3, `plastic_work_increment`).
     """
     phi, c, psi = softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
     if eps_dilation >= 0.0:
@@ -236,7 +339,22 @@ def plastic_work_increment(sxx, syy, szz, sxy, syz, szx, d_lam, xi_psi):
     potential g = xi_psi I1 + sqrt(J2) of Eq. (15), homogeneous of degree 1 in sigma, so
     sigma : dg/dsigma = g and d_w = d_lambda (xi_psi I1 + sqrt(J2)) at the returned stress
     (xi_psi of Eq. 16, or of `mc_constants`, at the softened psi of Eq. 19 that set the
-    flow direction)."""
+    flow direction).
+
+    Parameters
+    ----------
+    sxx, syy, szz, sxy, syz, szx : float
+        the returned effective stress (Pa).
+    d_lam : float
+        the plastic multiplier of Eq. (13).
+    xi_psi : float
+        the potential's constant (dimensionless).
+
+    Returns
+    -------
+    float
+        d_w (J/m^3).
+    """
     if d_lam == 0.0:
         return 0.0
     i1, _, _, _, j2 = _invariants(sxx, syy, szz, sxy, syz, szx)

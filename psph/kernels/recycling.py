@@ -16,7 +16,26 @@ import numpy as np
 @nb.njit(cache=True)
 def max_abs_products(n: int, basis: np.ndarray, k: int, r: np.ndarray,
                      free: np.ndarray) -> float:
-    """max |basis[i, j] r[i]| over the free owned rows i < n and the columns j < k."""
+    """The largest term of the products `rounded_dots` sums.
+
+    Parameters
+    ----------
+    n : int
+        owned rows 0..n-1.
+    basis : (cap, L) float64 array
+        the basis X.
+    k : int
+        columns in use.
+    r : (cap,) float64 array
+        the vector (Pa).
+    free : (cap,) bool array
+        rows whose value is not imposed.
+
+    Returns
+    -------
+    float
+        max |basis[i, j] r[i]| over the free rows i < n and the columns j < k.
+    """
     m = 0.0
     for i in range(n):
         if free[i]:
@@ -31,8 +50,19 @@ def max_abs_products(n: int, basis: np.ndarray, k: int, r: np.ndarray,
 @nb.njit(cache=True)
 def rounded_dots(n: int, basis: np.ndarray, k: int, r: np.ndarray, free: np.ndarray,
                  scale: float, out: np.ndarray) -> None:
-    """out[j] = sum over the free owned rows of round(basis[i, j] r[i] scale) (int64),
-    j < k: the terms on one grid, so that the ranks' integer sums add exactly."""
+    """Pre-rounded inner products: out[j] = sum over the free owned rows of
+    round(basis[i, j] r[i] scale), j < k, the terms on one grid, so that the ranks'
+    integer sums add exactly.
+
+    Parameters
+    ----------
+    n, basis, k, r, free
+        as `max_abs_products`.
+    scale : float
+        2^scale_exp, from the largest term over all ranks.
+    out : (>= k,) int64 array
+        receives the sums.
+    """
     for j in range(k):
         out[j] = 0
     for i in range(n):
@@ -45,7 +75,17 @@ def rounded_dots(n: int, basis: np.ndarray, k: int, r: np.ndarray, free: np.ndar
 @nb.njit(cache=True)
 def combine(n: int, basis: np.ndarray, k: int, c: np.ndarray, free: np.ndarray,
             x: np.ndarray) -> None:
-    """x[i] += sum_j c[j] basis[i, j] on the free owned rows."""
+    """x[i] += sum_j c[j] basis[i, j] on the free owned rows.
+
+    Parameters
+    ----------
+    n, basis, k, free
+        as `max_abs_products`.
+    c : (>= k,) float64 array
+        the coefficients.
+    x : (cap,) float64 array
+        the guess (Pa), added to.
+    """
     for i in range(n):
         if free[i]:
             s = 0.0
@@ -58,7 +98,19 @@ def combine(n: int, basis: np.ndarray, k: int, c: np.ndarray, free: np.ndarray,
 def orthogonalise(n: int, basis: np.ndarray, images: np.ndarray, k: int, h: np.ndarray,
                   free: np.ndarray, e: np.ndarray, se: np.ndarray) -> None:
     """e -= basis h and se -= images h on the free owned rows; the imposed rows of e and
-    se are set to 0 (the basis lives on the free rows)."""
+    se are set to 0 (the basis lives on the free rows).
+
+    Parameters
+    ----------
+    n, basis, k, free
+        as `max_abs_products`.
+    images : (cap, L) float64 array
+        the images S X.
+    h : (>= k,) float64 array
+        the projection coefficients.
+    e, se : (cap,) float64 arrays
+        the new correction and its image, orthogonalised in place.
+    """
     for i in range(n):
         if free[i]:
             a = 0.0
@@ -76,7 +128,21 @@ def orthogonalise(n: int, basis: np.ndarray, images: np.ndarray, k: int, h: np.n
 @nb.njit(cache=True)
 def store_column(n: int, basis: np.ndarray, images: np.ndarray, j: int, e: np.ndarray,
                  se: np.ndarray, s: float) -> None:
-    """basis[:n, j] = s e and images[:n, j] = s se."""
+    """basis[:n, j] = s e and images[:n, j] = s se.
+
+    Parameters
+    ----------
+    n : int
+        owned rows 0..n-1.
+    basis, images : (cap, L) float64 arrays
+        the basis X and its images S X.
+    j : int
+        the column to store into.
+    e, se : (cap,) float64 arrays
+        the correction and its image.
+    s : float
+        the normalising factor.
+    """
     for i in range(n):
         basis[i, j] = s * e[i]
         images[i, j] = s * se[i]

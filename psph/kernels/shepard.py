@@ -1,5 +1,5 @@
-"""Shepard filter of the pore pressure, Eq. (46), and the stress regularisation, in 2D and
-3D (one source per kernel, `dims.py`).
+"""Shepard filter of the pore pressure, Eq. (46) of Lian et al. (2023), and the stress
+regularisation, in 2D and 3D (one source per kernel, `dims.py`).
 
 p_i <- sum_j V_j W_ij p_j / sum_j V_j W_ij over the neighbours j within 2h (i included).
 Zeroth-order (constant-preserving) smoothing of the pressure noise; Section 3.5.2 applies
@@ -8,8 +8,7 @@ mirrored pressure), so a wall behaves as a symmetry plane. The effective stress 
 regularised in the same step, with the same sum or with its first-order (MLS) form.
 All three filters share one pair sweep, `kernel_moments`, which visits the pairs in the
 half-stencil order of the cells of side 2h (`neighbours.forward_slots` at span 1: the
-step's sweep's order in 2D; the 3D sweep runs on cells of side h); the 2D kernels keep
-the operations, and so the bits, of the 2D code before 3D.
+step's sweep's order in 2D; the 3D sweep runs on cells of side h).
 """
 
 import math
@@ -21,22 +20,61 @@ from psph.kernels.spline import w_cubic_dim
 
 
 def moment_width(dim: int, first_order: bool, m: int) -> int:
-    """Columns of `kernel_moments`'s output for m filtered columns: 1 + m (zeroth order);
-    first order, q = (1, x_j - x_i): the (dim + 1)(dim + 2)/2 entries of A and dim + 1 a
-    column."""
+    """Columns of `kernel_moments`'s output.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+    first_order : bool
+        the first-order (MLS) moments, q = (1, x_j - x_i).
+    m : int
+        number of filtered columns.
+
+    Returns
+    -------
+    int
+        1 + m (zeroth order); first order: the (dim + 1)(dim + 2)/2 entries of A and
+        dim + 1 a column.
+    """
     if not first_order:
         return 1 + m
     return (dim + 1) * (dim + 2) // 2 + (dim + 1) * m
 
 
 def make_kernel_moments(dim: int):
-    """`kernel_moments` in `dim` = 2 or 3 dimensions."""
+    """`kernel_moments` in `dim` = 2 or 3 dimensions.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `kernel_moments`.
+    """
     n_rows = half_stencil_rows(dim)
     n_a = (dim + 1) * (dim + 2) // 2  # the unique entries of the symmetric A
 
     @nb.njit(cache=True, inline="always")
     def add_moments(row, w, d0, d1, d2, fj, first_order):
-        """Add neighbour j (weight w = V_j W_ij, offset x_j - x_i, values fj) to one row."""
+        """Add neighbour j to one row of the moments.
+
+        Parameters
+        ----------
+        row : float64 array
+            the row of `kernel_moments`'s output.
+        w : float
+            weight V_j W_ij (dimensionless).
+        d0, d1, d2 : float
+            offset x_j - x_i (m); d2 = 0 in 2D.
+        fj : float64 array
+            j's values of the filtered columns.
+        first_order : bool
+            first-order (MLS) moments.
+        """
         m = fj.shape[0]
         if not first_order:
             row[0] += w
@@ -73,12 +111,29 @@ def make_kernel_moments(dim: int):
     def kernel_moments(n_owned, x, f, vol, cell_start, order, ncell, h, first_order, mom):
         """Kernel-weighted moments of the columns of f over the neighbours j within 2h of
         every owned particle i (i included; halo rows and wall ghosts are neighbours),
-        w = V_j W_ij:
+        w = V_j W_ij.
 
-        first_order False: mom[i, 0] = sum w, mom[i, 1 + c] = sum w f[j, c] (Eq. 46's sums);
-        first_order True, q = (1, x_j - x_i): mom[i, :n_a] = A = sum w q q^T (its upper
-        triangle row by row) and mom[i, n_a + (dim + 1) c + k] = sum w q_k f[j, c].
-        mom needs `moment_width(dim, first_order, m)` columns for m columns of f."""
+        Parameters
+        ----------
+        n_owned : int
+            owned rows 0..n_owned-1.
+        x : (cap, dim) float64 array
+            positions (m).
+        f : (cap, m) float64 array
+            the filtered columns (any unit).
+        vol : (cap,) float64 array
+            particle volumes (m^3; m^2 per unit thickness in 2D).
+        cell_start, order, ncell : int64 arrays
+            a cell list with cells of side 2h.
+        h : float
+            smoothing length (m).
+        first_order : bool
+            False: mom[i, 0] = sum w, mom[i, 1 + c] = sum w f[j, c] (the sums of Eq. 46);
+            True, q = (1, x_j - x_i): mom[i, :n_a] = A = sum w q q^T (its upper triangle
+            row by row) and mom[i, n_a + (dim + 1) c + k] = sum w q_k f[j, c].
+        mom : (>= n_owned, `moment_width(dim, first_order, m)`) float64 array
+            receives the moments.
+        """
         m = f.shape[1]
         w0 = w_cubic_dim(0.0, h, dim)
         width = n_a + (dim + 1) * m if first_order else 1 + m
@@ -125,7 +180,18 @@ kernel_moments_3d = make_kernel_moments(3)
 
 
 def make_filters(dim: int):
-    """(shepard_pressure, shepard_stress, mls_stress) in `dim` = 2 or 3 dimensions."""
+    """The filters in `dim` = 2 or 3 dimensions.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    shepard_pressure, shepard_stress, mls_stress : functions
+        compiled.
+    """
     moments = make_kernel_moments(dim)
     n_stress = 4 if dim == 2 else 6  # xx, yy, zz, xy (2D); + yz, zx (3D)
 
@@ -134,7 +200,31 @@ def make_filters(dim: int):
                          order, ncell, h, mom):
         """Filter p of particles 0..n_owned-1 in place (Eq. 46). Particles with an imposed
         pressure (drained_from <= t) keep it. p_prev moves with p, so the TPI increment
-        p - p_prev of Eq. (39) is not changed by the filter. mom: scratch (>= n_owned, 2)."""
+        p - p_prev of Eq. (39) is not changed by the filter.
+
+        Parameters
+        ----------
+        n_total : int
+            rows in use (owned, halo, ghosts).
+        n_owned : int
+            owned rows 0..n_owned-1.
+        x : (cap, dim) float64 array
+            positions (m).
+        p, p_prev : (cap,) float64 arrays
+            pore pressure now and one step before (Pa), filtered in place.
+        vol : (cap,) float64 array
+            particle volumes (m^3; m^2 per unit thickness in 2D).
+        drained_from : (cap,) float64 array
+            time from which p = 0 is imposed (s).
+        t : float
+            time (s).
+        cell_start, order, ncell : int64 arrays
+            a cell list with cells of side 2h.
+        h : float
+            smoothing length (m).
+        mom : (>= n_owned, 2) float64 array
+            scratch.
+        """
         moments(n_owned, x, p.reshape((p.shape[0], 1)), vol, cell_start, order, ncell, h,
                 False, mom)
         for i in range(n_owned):
@@ -150,7 +240,17 @@ def make_filters(dim: int):
         regularisation the paper points to for this noise (its ref. [14], there with MLS,
         `mls_stress`). The odd-even mode of sigma' is invisible to the pair-symmetric
         divergence of Eq. (26), so nothing else damps it. Wall ghosts carry the mirrored
-        stress. mom: scratch (>= n_owned, 1 + the stress's columns)."""
+        stress.
+
+        Parameters
+        ----------
+        n_total, n_owned, x, vol, cell_start, order, ncell, h
+            as `shepard_pressure`.
+        stress : (cap, 4) or (cap, 6) float64 array
+            effective stress (Pa), filtered in place.
+        mom : (>= n_owned, 1 + the stress's columns) float64 array
+            scratch.
+        """
         moments(n_owned, x, stress, vol, cell_start, order, ncell, h, False, mom)
         for i in range(n_owned):
             if mom[i, 0] > 0.0:
@@ -169,10 +269,19 @@ def make_filters(dim: int):
         It reproduces linear fields exactly, also where the support is cut: the
         zeroth-order Shepard sum pulls a free-surface particle's stress toward its interior
         neighbours', away from what its own strain carries, while Eq. (24) keeps
-        integrating the strain into the porosity (issue 13: n drifted to 0 at the slope
-        face). Where A_i is nearly singular (too few neighbours off a line, or off a plane
-        in 3D) it falls back to Shepard. mom: scratch (>= n_owned, `moment_width(dim,
-        True, columns)`)."""
+        integrating the strain into the porosity (n drifts to 0 at a slope face). Where
+        A_i is nearly singular (too few neighbours off a line, or off a plane in 3D) it
+        falls back to Shepard.
+
+        Parameters
+        ----------
+        n_total, n_owned, x, vol, cell_start, order, ncell, h
+            as `shepard_pressure`.
+        stress : (cap, 4) or (cap, 6) float64 array
+            effective stress (Pa), filtered in place.
+        mom : (>= n_owned, `moment_width(dim, True, columns)`) float64 array
+            scratch.
+        """
         moments(n_owned, x, stress, vol, cell_start, order, ncell, h, True, mom)
         for i in range(n_owned):
             r = mom[i]
@@ -209,10 +318,22 @@ def make_filters(dim: int):
 
 @nb.njit(cache=True, inline="always")
 def first_column_4(r):
-    """(ok, b0..b3): the first column of the inverse of the symmetric 4x4 matrix A whose
-    upper triangle is r[0:10] (00 01 02 03 11 12 13 22 23 33), i.e. A b = e1, by cofactors
-    of the first row; ok False where A is nearly singular (det against the product of the
-    diagonal, scale-free as in 2D) or A_00 <= 0."""
+    """The first column b of the inverse of a symmetric 4x4 matrix A (A b = e1), by
+    cofactors of the first row.
+
+    Parameters
+    ----------
+    r : float64 array
+        r[0:10] is A's upper triangle (00 01 02 03 11 12 13 22 23 33).
+
+    Returns
+    -------
+    ok : bool
+        False where A is nearly singular (det against the product of the diagonal,
+        scale-free as in 2D) or A_00 <= 0.
+    b0, b1, b2, b3 : float
+        b (0 where not ok).
+    """
     a00, a01, a02, a03 = r[0], r[1], r[2], r[3]
     a11, a12, a13, a22, a23, a33 = r[4], r[5], r[6], r[7], r[8], r[9]
     # 2x2 minors of rows 2-3 (columns j, k), then the cofactors C_0j of the first row

@@ -1,13 +1,13 @@
 """Particle shifting: keep the particle arrangement regular where the soil deforms.
 
-The pair-symmetric momentum Eq. (26) carries, for the pore pressure, the term
--2 p_i S_i / rho_i with S_i = sum_j V_j grad_i W_ij, the gradient of the particle
+The pair-symmetric momentum Eq. (26) of Lian et al. (2023) carries, for the pore pressure,
+the term -2 p_i S_i / rho_i with S_i = sum_j V_j grad_i W_ij, the gradient of the particle
 concentration C_i = sum_j V_j W_ij. On an even arrangement S_i = 0; in a disordered layer
 (the base of a spreading debris, where particles sink between their neighbours) it is not,
-and a particle there holds its place with a pressure its neighbours do not have
-(issue 13, cause 12: 2.6x its neighbours' pressure at the slope's base). The pressure
-differences alone, without that term, are unstable at free corners (README, cause 12),
-so the arrangement is kept even instead, as incompressible SPH does (Lind et al. 2012,
+and a particle there holds its place with a pressure its neighbours do not have (2.6x its
+neighbours' at the base of the retrogressive slope). The pressure differences alone,
+without that term, are unstable at free corners (`update.pore_pressure_force`), so the
+arrangement is kept even instead, as incompressible SPH does (Lind et al. 2012,
 J. Comput. Phys. 231; Skillen et al. 2013, CMAME 265): each step every particle moves by
 
     delta r_i = -D grad C_i,   D = A h^2 |L_i| dt,
@@ -16,14 +16,14 @@ down the concentration gradient, by at most `cap` (a fraction of dx). |L_i| is t
 of the particle's velocity gradient (sums 4-7 of `pair_sums`): disorder is made by
 deformation, so soil at rest or in rigid motion does not shift, and the bottom row under a
 debris sliding on a no-slip base does (there |v| is small, and a shift scaled with |v|,
-as Skillen et al.'s, left the basal layer as disordered as without it). Near a free
+as Skillen et al.'s, leaves the basal layer as disordered as without it). Near a free
 surface S_i points into the soil because the support is cut, not because the particles are
 uneven, so by the trace of the moment matrix of Eq. (22) (1.98 inside, 1.92 on the second
 row and 1.28 on the surface row of a lattice at h = 1.2 dx): below `free_trace` (the free
 surface of the ponding condition) a particle does not shift; below `surface_trace` only
-the part along the surface is kept. (Shifting the surface row along its tangent lifted
-the debris front of the slope off the floor, particle by particle, until one compacted
-to n = 0 at 6.2 s.) The particle's fields (stress, porosity, pressure, plastic strain,
+the part along the surface is kept (shifting the surface row along its tangent too lifts
+the debris front of the slope off the floor, particle by particle, until one compacts to
+n = 0). The particle's fields (stress, porosity, pressure, plastic strain,
 displacement) stay with it: the shift is a small fraction of dx per step, an error of the
 order of delta r . grad f.
 
@@ -77,8 +77,31 @@ def shift_particles(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, free
                     shift):
     """Move owned particles by delta r_i = -A h^2 |L_i| dt grad C_i (module docstring), at
     most `cap` long; not at all where trace(M_i) < free_trace, only along the surface
-    where trace(M_i) < surface_trace (M_i: columns 0-3 of `sums`, the sums of
-    `pair_sums`; L_i: columns 4-7). The shifts are written to `shift`."""
+    where trace(M_i) < surface_trace.
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    grad_c : (cap, 2) float64 array
+        concentration gradient grad C_i (1/m).
+    sums : (cap, nsums) float64 array
+        the sums of `pair_sums`: M_i in columns 0-3, L_i (1/s) in columns 4-7.
+    coef : float
+        A (dimensionless).
+    h : float
+        smoothing length (m).
+    dt : float
+        time step (s).
+    cap : float
+        the longest shift (m).
+    surface_trace, free_trace : float
+        the thresholds of trace(M_i) (dimensionless).
+    x : (cap, 2) float64 array
+        positions (m), moved in place.
+    shift : (cap, 2) float64 array
+        receives the shifts (m).
+    """
     for i in range(n_owned):
         m = sums[i]
         trace = m[0] + m[3]
@@ -166,8 +189,24 @@ GV_3D = sum_layout(3).GV
 @nb.njit(cache=True)
 def shift_particles_3d(n_owned, grad_c, sums, coef, h, dt, cap, surface_trace, x, shift):
     """`shift_particles` in 3D: M_i and L_i from the 3D layout of `sums`
-    (`sum_columns.sum_layout(3)`), grad_c and shift (n, 3); no shift on the free surface
-    of `free_surface.on_free_surface`."""
+    (`sum_columns.sum_layout(3)`); no shift on the free surface of
+    `free_surface.on_free_surface`.
+
+    Parameters
+    ----------
+    n_owned, coef, h, dt, cap
+        as `shift_particles`.
+    grad_c : (cap, 3) float64 array
+        concentration gradient (1/m).
+    sums : (cap, nsums) float64 array
+        the 3D pair sums.
+    surface_trace : float
+        trace(M_i) below which only the part along the surface is kept.
+    x : (cap, 3) float64 array
+        positions (m), moved in place.
+    shift : (cap, 3) float64 array
+        receives the shifts (m).
+    """
     cm = M_3D
     cgv = GV_3D
     for i in range(n_owned):

@@ -1,4 +1,4 @@
-"""Cubic spline kernel, Eq. (21), in 2D and 3D.
+"""Cubic spline kernel, Eq. (21) of Lian et al. (2023), in 2D and 3D.
 
 The paper prints the inner branch as 2/3 - q^2 + q^3/3, which is discontinuous at q = 1;
 the standard cubic spline (Monaghan), continuous with its derivative, has q^3/2 and is what
@@ -6,7 +6,7 @@ is used here. Support radius 2h, normalisation alpha_d = 15 / (7 pi h^2) in 2D a
 3 / (2 pi h^3) in 3D (Monaghan 1992; the kernel integrates to one in both).
 
 `w_cubic_dim` and `dw_cubic_dim` take the dimension; `w_cubic` and `dw_cubic` are their
-2D cases, the same expressions in the same order, so the 2D kernels keep their bits.
+2D cases.
 """
 
 import math
@@ -19,7 +19,22 @@ ALPHA_3D = 3.0 / (2.0 * math.pi)
 
 @nb.njit(cache=True, inline="always")
 def w_cubic_dim(r: float, h: float, dim: int) -> float:
-    """Kernel value W(r, h) of Eq. (21) in `dim` = 2 or 3 dimensions (1/m^dim)."""
+    """Kernel value W(r, h) of Eq. (21).
+
+    Parameters
+    ----------
+    r : float
+        distance (m).
+    h : float
+        smoothing length (m).
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    float
+        W (1/m^dim).
+    """
     q = r / h
     a = ALPHA_2D / (h * h) if dim == 2 else ALPHA_3D / (h * h * h)
     if q < 1.0:
@@ -32,8 +47,22 @@ def w_cubic_dim(r: float, h: float, dim: int) -> float:
 
 @nb.njit(cache=True, inline="always")
 def dw_cubic_dim(r: float, h: float, dim: int) -> float:
-    """Radial derivative dW/dr of Eq. (21) in `dim` = 2 or 3 dimensions (1/m^(dim+1));
-    <= 0 everywhere."""
+    """Radial derivative dW/dr of Eq. (21).
+
+    Parameters
+    ----------
+    r : float
+        distance (m).
+    h : float
+        smoothing length (m).
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    float
+        dW/dr (1/m^(dim+1)), <= 0 everywhere.
+    """
     q = r / h
     a = ALPHA_2D / (h * h * h) if dim == 2 else ALPHA_3D / (h * h * h * h)
     if q < 1.0:
@@ -46,11 +75,37 @@ def dw_cubic_dim(r: float, h: float, dim: int) -> float:
 
 @nb.njit(cache=True, inline="always")
 def w_cubic(r: float, h: float) -> float:
-    """Kernel value W(r, h) of Eq. (21) in 2D (1/m^2)."""
+    """Kernel value W(r, h) of Eq. (21) in 2D.
+
+    Parameters
+    ----------
+    r : float
+        distance (m).
+    h : float
+        smoothing length (m).
+
+    Returns
+    -------
+    float
+        W (1/m^2).
+    """
     return w_cubic_dim(r, h, 2)
 
 
 @nb.njit(cache=True, inline="always")
 def dw_cubic(r: float, h: float) -> float:
-    """Radial derivative dW/dr of Eq. (21) in 2D (1/m^3); <= 0 everywhere."""
+    """Radial derivative dW/dr of Eq. (21) in 2D.
+
+    Parameters
+    ----------
+    r : float
+        distance (m).
+    h : float
+        smoothing length (m).
+
+    Returns
+    -------
+    float
+        dW/dr (1/m^3), <= 0 everywhere.
+    """
     return dw_cubic_dim(r, h, 2)

@@ -1,8 +1,9 @@
 """Column layout of `sums`, the per-particle neighbour sums of one step's pair sweep
 (`interactions.pair_sums`), one row per particle. Module-level integers: numba reads them
-as compile-time constants, so `s[GV_XY]` costs what `s[5]` did.
+as compile-time constants, so `s[GV_XY]` costs what `s[5]` would.
 
-With dW = grad_i W_ij (Eq. 21), r_ji = x_j - x_i, F_ij = r_ji . dW / |r_ji|^2, A_ij =
+With dW = grad_i W_ij (Eq. 21 of Lian et al. 2023), r_ji = x_j - x_i,
+F_ij = r_ji . dW / |r_ji|^2, A_ij =
 V_j kbar_ij 2F_ij (Eq. 33) and components m, n, a in (x, y):
 
   M_mn     sum V_j r_ji^m dW^n                        moment matrix, Eq. (22)
@@ -19,7 +20,7 @@ V_j kbar_ij 2F_ij (Eq. 33) and components m, n, a in (x, y):
 
 vs is the free-slip mirror velocity on wall ghosts (`interactions.py`, "Walls"). The
 two-index groups are row-major: XX, XY, YX, YY. The constants below are the 2D layout;
-`sum_layout(dim)` gives the same groups in 2D or 3D (issue 37).
+`sum_layout(dim)` gives the same groups in 2D or 3D.
 """
 
 from typing import NamedTuple
@@ -70,7 +71,18 @@ class SumLayout(NamedTuple):
 
 def sum_layout(dim: int) -> SumLayout:
     """The layout of `sums` in 2D (the module's constants above) or 3D: the same groups in
-    the same order, each of its size in `dim` dimensions."""
+    the same order, each of its size in `dim` dimensions.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    SumLayout
+        the first column of each group and NSUMS.
+    """
     t, v = dim * dim, dim
     sizes = (("M", t), ("GV", t), ("GP", v), ("GN", t), ("Q", v), ("SUM_A", 1),
              ("SUM_AP", 1), ("SUM_APSI", 1), ("GA", t), ("DVDT", v), ("GS", t))

@@ -1,6 +1,7 @@
 """Per-particle update of one step from the sums of `interactions.pair_sums`.
 
-Applies the correction matrix of Eq. (22), then advances (leapfrog, Eq. 27) the effective
+Applies the correction matrix of Eq. (22) of Lian et al. (2023), then advances (leapfrog,
+Eq. 27) the effective
 stress (linear elastic, Jaumann rate, Eq. 11 without plasticity; plane strain), the
 porosity (Eq. 24), the pore pressure (explicit Eq. 25 or TPI Eq. 38-39), the velocity
 (Eq. 45: Eq. 26 + global damping Eq. 43-44 + body force + surface loads) and the position.
@@ -50,7 +51,7 @@ SCHEME_TPI = 2
 SCHEME_PROJECTION = 3  # p^(n+1) solved before `advance` (psph/kernels/projection.py)
 
 # columns of the material table (`psph.physics.material.material_table`): one row per
-# material, indexed by a particle's `material` field (issue 16)
+# material, indexed by a particle's `material` field
 MAT_LAM = 0  # Lame lambda (Pa)
 MAT_SHEAR = 1  # shear modulus mu (Pa)
 MAT_BULK3 = 2  # 3K = 3 lambda + 2 mu (Pa)
@@ -91,14 +92,35 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, beta, dt):
     over sum_a + beta / dt (N < 0). Where p^t < 0 and p^(t+1) < 0 this is Eq. (47) with
     p_i^t in its beta term; where both are >= 0, Eq. (38).
 
-    Eq. (47) as printed decides the branch by p^t and stores against p~_i^(t+alpha).
-    beta / dt is thousands of times sum_a (5,600 at dx = 0.04, k = 2e-4, dt = 2e-5), so
-    there a negative p barely moves: the step that crossed zero from above landed at
-    Eq. (38)'s value, its one-sweep jump, which the storage then kept, and the
-    extrapolation carried every step's change on by alpha / (1 - alpha) again. The suction
-    so held was set by the step: the saturated collapse at dt and dt / 2 differed by
-    1.7x in its most negative p after 1 ms and by 31 % in kinetic energy after 10 ms,
-    where this form agrees to 2 % and 0.3 % (README, "Eq. (47) and the time step")."""
+    Why not Eq. (47) as printed, which decides the branch by p^t and stores against
+    p~_i^(t+alpha): beta / dt is thousands of times sum_a (5,600 at dx = 0.04, k = 2e-4,
+    dt = 2e-5), so there a negative p barely moves; the step that crosses zero from above
+    lands at Eq. (38)'s value, its one-sweep jump, which the storage then keeps, and the
+    extrapolation carries every step's change on by alpha / (1 - alpha) again. The
+    suction so held is set by the step: the saturated collapse at dt and dt / 2 differs
+    by 1.7x in its most negative p after 1 ms and by 31 % in kinetic energy after 10 ms,
+    where this form agrees to 2 % and 0.3 % (docs/vv/collapse_beta.md).
+
+    Parameters
+    ----------
+    b_i : float
+        B_i of Eq. (36) (Pa/(m s)).
+    sum_a : float
+        sum_j A_ij (Eq. 33), > 0 (1/(m s)).
+    sum_ap : float
+        sum_j A_ij p~_j (Pa/(m s)).
+    p_i : float
+        the particle's pressure p^t (Pa).
+    beta : float
+        the storage of Eq. (47) (1/m); 0: none.
+    dt : float
+        time step (s).
+
+    Returns
+    -------
+    float
+        p_i^(t+1) (Pa).
+    """
     if beta > 0.0:
         num = b_i + sum_ap + beta * min(p_i, 0.0) / dt
         if num < 0.0:
@@ -135,7 +157,29 @@ def _momentum(i, s, cdv, v, acc, rho, vol, load_index, traction, load_value, b0,
 def set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, rho_s, rho_l, k_sat, c_k):
     """Porosity n_new for particle i and what follows from it: the volume with the solid
     mass kept (incompressible grains, Eq. 8), the mixture density and, where c_k > 0, the
-    hydraulic conductivity from the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4)."""
+    hydraulic conductivity from the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
+
+    Parameters
+    ----------
+    i : int
+        the particle's row.
+    n_new : float
+        the new porosity.
+    poro, poro0 : (cap,) float64 arrays
+        porosity and initial porosity; poro[i] is set.
+    vol, vol0 : (cap,) float64 arrays
+        volume and initial volume (m^3; m^2 in 2D); vol[i] is set.
+    rho : (cap,) float64 array
+        mixture density (kg/m^3); rho[i] is set.
+    perm : (cap,) float64 array
+        hydraulic conductivity k (m/s); perm[i] is set where c_k > 0.
+    rho_s, rho_l : float
+        grain and water densities (kg/m^3).
+    k_sat : float
+        hydraulic conductivity at the initial void ratio (m/s).
+    c_k : float
+        C_k of Eq. (4) (dimensionless); 0: constant k.
+    """
     poro[i] = n_new
     vol[i] = vol0[i] * (1.0 - poro0[i]) / (1.0 - n_new)
     rho[i] = (1.0 - n_new) * rho_s + n_new * rho_l
@@ -155,10 +199,27 @@ def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, v
     neighbours' fit (`mls_stress`, `shepard_stress`) changes tr(sigma') by d_tr without a
     strain, which Eq. (24) never sees. Left so, a particle whose div v is biased (a
     debris-front surface particle with 9-11 neighbours, p held at 0 by ponding) compacts in
-    n while the filter keeps erasing the stress that would resist it: n 0.40 -> 0.021 in
-    27 s (issue 13, README). Here n += (1 - n) d_tr / (3K), the elastic strain of d_tr.
-    3K = 3 lambda + 2 mu, rho_s, k_sat and c_k: the row of the particle's material in the
-    table `mat` (MAT_* columns); trace_before: tr(sigma') before the filter."""
+    n while the filter keeps erasing the stress that would resist it (n 0.40 -> 0.021 in
+    27 s of the retrogressive slope). Here n += (1 - n) d_tr / (3K), the elastic strain of
+    d_tr.
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    trace_before : (cap,) float64 array
+        tr(sigma') before the filter (Pa).
+    stress : (cap, 4) or (cap, 6) float64 array
+        the filtered effective stress (Pa).
+    poro, poro0, vol, vol0, rho, perm
+        as `set_porosity`, updated.
+    rho_l : float
+        water density (kg/m^3).
+    mat : (n_materials, MAT_COLUMNS) float64 array
+        the material table (3K = 3 lambda + 2 mu, rho_s, k_sat, c_k in MAT_* columns).
+    material : (cap,) float64 array
+        each particle's row of `mat`.
+    """
     for i in range(n_owned):
         row = mat[int(material[i])]
         d_tr = stress[i, 0] + stress[i, 1] + stress[i, 2] - trace_before[i]
@@ -175,13 +236,31 @@ def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol
 
     Undrained, Eq. (25) changes p by -(K_l / n) div v per unit time and Eq. (24) changes n
     by (1 - n) div v; the Shepard filter changes p by dp without a strain. Left so, a basal
-    particle squeezed between two near-wall particles compacted in n (0.354 -> 0.304 in
-    1 s) while the filter erased, every 30 steps, the pressure that resisted it (issue 13,
-    README). Here n += -(1 - n) n dp / K_l, the strain of dp. p_before: p before the filter.
-    Off by default (`stabilisation.pressure_filter_porosity`): read as an exchange of pore
-    water between neighbours, the filter moves no strain, and with the ponding clip this
-    version compacts free-surface particles (README cause 12). rho_s, k_sat, c_k: the row
-    of the particle's material in `mat`."""
+    particle squeezed between two near-wall particles compacts in n (0.354 -> 0.304 in
+    1 s) while the filter erases, every 30 steps, the pressure that resisted it. Here
+    n += -(1 - n) n dp / K_l, the strain of dp. Off by default
+    (`stabilisation.pressure_filter_porosity`): read as an exchange of pore water between
+    neighbours, the filter moves no strain, and with the ponding clip this version
+    compacts free-surface particles.
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    p_before : (cap,) float64 array
+        p before the filter (Pa).
+    p : (cap,) float64 array
+        the filtered pore pressure (Pa).
+    poro, poro0, vol, vol0, rho, perm
+        as `set_porosity`, updated.
+    rho_l : float
+        water density (kg/m^3).
+    mat, material
+        the material table and each particle's row, as
+        `porosity_follows_stress_filter`.
+    bulk_water : float
+        bulk modulus of water K_l (Pa).
+    """
     for i in range(n_owned):
         row = mat[int(material[i])]
         n_i = poro[i]
@@ -201,9 +280,25 @@ def pore_pressure_force(n_owned, sums, rho, corrected, norm, share):
     The pair-symmetric form -sum_j V_j (p_i + p_j) grad W_ij / rho_i holds the term
     -2 p_i S_i / rho_i, S_i = sum_j V_j grad W_ij, which vanishes only where the support
     is even: in a disordered basal layer a particle holds its place there with a
-    pressure its neighbours do not have (issue 13, cause 12). Pressure differences
-    exert no force from a uniform p on any arrangement (the wall ghosts carry the
-    hydrostatic or the antisymmetric mirror of p), at the price of momentum conservation."""
+    pressure its neighbours do not have. Pressure differences exert no force from a
+    uniform p on any arrangement (the wall ghosts carry the hydrostatic or the
+    antisymmetric mirror of p), at the price of momentum conservation.
+
+    Parameters
+    ----------
+    n_owned : int
+        owned rows 0..n_owned-1.
+    sums : (cap, nsums) float64 array
+        the 2D pair sums; DVDT (m/s^2) is added to.
+    rho : (cap,) float64 array
+        mixture density (kg/m^3).
+    corrected : bool
+        use the corrected gradient of Eq. (22).
+    norm : float
+        1 / m0, the lattice moment (`laplacian.lattice_moment`).
+    share : float
+        the share of p in the force (1: all of it).
+    """
     for i in range(n_owned):
         s = sums[i]
         if corrected:
@@ -216,14 +311,53 @@ def pore_pressure_force(n_owned, sums, rho, corrected, norm, share):
 
 
 def make_kick(dim: int):
-    """`kick` in `dim` = 2 or 3 dimensions (one source, `dims.py`)."""
+    """`kick` in `dim` = 2 or 3 dimensions (one source, `dims.py`).
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `kick`.
+    """
     cdv = sum_layout(dim).DVDT
 
     @nb.njit(cache=True, error_model="numpy")
     def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
              damping, dt, b2=0.0):
         """The kick of the symplectic step, v^(n+1) = v^n + dt a^n (Eq. 45 at the state of
-        step n); `advance(..., kicked=True)` then takes the rates from v^(n+1)."""
+        step n); `advance(..., kicked=True)` then takes the rates from v^(n+1).
+
+        Parameters
+        ----------
+        n_owned : int
+            owned rows 0..n_owned-1.
+        sums : (cap, nsums) float64 array
+            the pair sums (DVDT: the acceleration of Eq. 26, m/s^2).
+        v : (cap, dim) float64 array
+            velocity (m/s), updated.
+        acc : (cap, dim) float64 array
+            receives the acceleration (m/s^2).
+        rho : (cap,) float64 array
+            mixture density (kg/m^3).
+        vol : (cap,) float64 array
+            particle volumes (m^3; m^2 per unit thickness in 2D).
+        load_index : (cap,) float64 array
+            each particle's surface load (-1: none).
+        traction : (cap, dim) float64 array
+            the tributary area vector -n dA of a loaded particle (m^2; m in 2D).
+        load_value : float64 array
+            the loads' current values (Pa).
+        b0, b1, b2 : float
+            body force (m/s^2); b2 in 3D only.
+        damping : float
+            c_d of Eq. (44) (1/s).
+        dt : float
+            time step (s).
+        """
         for i in range(n_owned):
             _momentum(i, sums[i], cdv, v, acc, rho, vol, load_index, traction, load_value,
                       b0, b1, b2, damping, dt, dim)
@@ -236,44 +370,73 @@ kick_3d = make_kick(3)
 
 
 def make_advance(dim: int):
-    """`advance` in `dim` = 2 or 3 dimensions (one source, `dims.py`); 2D the plane-strain
-    step as before, the same bits."""
+    """`advance` in `dim` = 2 or 3 dimensions (one source, `dims.py`); 2D is the
+    plane-strain step.
+
+    Parameters
+    ----------
+    dim : int
+        2 or 3.
+
+    Returns
+    -------
+    function
+        the compiled `advance`.
+    """
     lay = sum_layout(dim)
     cm, cgv, cgs, cgn, cgp, cq = lay.M, lay.GV, lay.GS, lay.GN, lay.GP, lay.Q
     ca, cap_, capsi, cga, cdv = lay.SUM_A, lay.SUM_AP, lay.SUM_APSI, lay.GA, lay.DVDT
 
     @nb.njit(cache=True, error_model="numpy")
     def advance(n_owned, sums, f, loads, mat, eps_soft, box, par):
-        """Advance owned particles 0..n_owned-1 by dt. Returns the index of the first particle
-        with a non-finite pressure or velocity or outside `box` (xmin, ymin, [zmin,] xmax,
-        ymax[, zmax]), or -1. In 3D the same steps with the 3x3 correction and the full
-        spin (`kinematics.py`) and `plasticity.dp_return_3d`.
+        """Advance owned particles 0..n_owned-1 by dt. In 3D the same steps with the 3x3
+        correction and the full spin (`kinematics.py`) and `plasticity.dp_return_3d`.
 
-        f: `bundles.UpdateFields` (owned rows); loads: `bundles.SurfaceLoads`; par:
-        `bundles.StepParams`, whose members are named below.
+        The softening of phi and c, Eq. (17)-(18), takes eps_soft[i]; the decay of psi,
+        Eq. (19), the particle's own eps_p: the approach to the critical state is the
+        particle's own (with the regularised strain a row sliding on a wall, twice as
+        strained as its support's average, would keep eps_hat = 0 and psi = psi_0 and
+        contract to n = 0).
 
-        mat: the material table (n_materials, MAT_COLUMNS), row int(material[i]) for particle
-        i: Lame constants lambda, mu (Pa), rho_s, k_sat and c_k of Eq. (4), the porosity floor
-        n_min (0: none), the Drucker-Prager flag and parameters (issue 16);
-        bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
-        (b0, b1): body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme: 0 dry,
-        1 explicit Eq. (25), 2 TPI Eq. (38), with the storage of Eq. (47) below zero when
-        beta > 0 (beta: Eq. 47; `tpi_pressure`; alpha of Eq. 39 is in the sums),
-        3 projection (p already solved); p = 0 is imposed where drained_from <= t.
-        plastic: some material is Drucker-Prager; then the elastic trial stress of a particle
-        whose material is returns to its surface with the parameters (phi_p, phi_r, c_p, c_r,
-        psi_0, eta, s_f) (Eq. 13-19) and eps_p accumulates the equivalent plastic strain;
-        the softening of phi and c, Eq. (17)-(18), takes eps_soft[i]: eps_p itself (the local
-        law) or the regularised strain of `nonlocal_strain.nonlocal_strain` (issue 17); the
-        decay of psi, Eq. (19), the particle's own eps_p (the approach to the critical state
-        is the particle's own: with the regularised strain a row sliding on a wall, twice as
-        strained as its support's average, kept eps_hat = 0, psi = psi_0 and contracted to
-        n = 0, README issue 17); plastic_work
-        accumulates the dissipated work sigma : d eps_p (J/m^3, `plasticity.dp_return`).
-        ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2); c_k > 0: the
-        hydraulic conductivity follows the void ratio, k = k_sat exp((e - e0) / c_k), Eq. (4).
-        kicked: `kick` has already advanced v (symplectic step) and `sums` holds the velocity
-        gradient of the new v; only the position moves with it here.
+        Parameters
+        ----------
+        n_owned : int
+            owned rows 0..n_owned-1.
+        sums : (cap, nsums) float64 array
+            the pair sums of `interactions.pair_sums`.
+        f : `bundles.UpdateFields`
+            the owned rows' fields (SI units), updated; p = 0 is imposed where
+            f.drained_from <= t; f.eps_p accumulates the equivalent plastic strain and
+            f.plastic_work the dissipated work sigma : d eps_p (J/m^3,
+            `plasticity.dp_return`).
+        loads : `bundles.SurfaceLoads`
+            the surface loads (Pa) and each particle's tributary area vector.
+        mat : (n_materials, MAT_COLUMNS) float64 array
+            the material table, row int(material[i]) for particle i: Lame constants
+            lambda, mu (Pa), rho_s (kg/m^3), k_sat (m/s) and c_k of Eq. (4), the porosity
+            floor n_min (0: none), the Drucker-Prager flag and parameters (phi_p, phi_r,
+            c_p, c_r, psi_0, eta, s_f of Eq. 13-19; rad, Pa), the tension cut-off (Pa) and
+            the Mohr-Coulomb flag.
+        eps_soft : (cap,) float64 array
+            the strain that softens phi and c: eps_p itself (the local law) or the
+            regularised strain of `nonlocal_strain.nonlocal_strain`.
+        box : float64 array
+            the domain (xmin, ymin[, zmin], xmax, ymax[, zmax]) (m).
+        par : `bundles.StepParams`
+            dt, t (s); bulk_water K_l (Pa); gamma_l = rho_l g (N/m^3) (one pore fluid);
+            b0, b1[, b2]: body force (m/s^2); damping: c_d of Eq. (44) (1/s); scheme:
+            0 dry, 1 explicit Eq. (25), 2 TPI Eq. (38) with the storage of Eq. (47) below
+            zero when beta > 0 (`tpi_pressure`; alpha of Eq. 39 is in the sums),
+            3 projection (p already solved); plastic: some material is Drucker-Prager;
+            ponding: free-surface particles get p <= 0 (1, Section 4.4) or p = 0 (2);
+            kicked: `kick` has already advanced v (symplectic step) and `sums` holds the
+            velocity gradient of the new v, so only the position moves with it here.
+
+        Returns
+        -------
+        int
+            the index of the first particle with a non-finite pressure, velocity or
+            stress, outside `box`, or (coupled) with a porosity outside (0, 1); -1 if none.
         """
         x, u, v, stress, p, p_prev = f.x, f.u, f.v, f.stress, f.p, f.p_prev
         poro, poro0, vol, vol0, rho, perm = f.poro, f.poro0, f.vol, f.vol0, f.rho, f.perm
@@ -306,18 +469,18 @@ def make_advance(dim: int):
                 div_v = l00 + l11
                 if not correct_strain:
                     # shear rate and spin from the plain kernel gradient (Bui et al. 2008): the
-                    # corrected one excites a growing zig-zag mode at free surfaces (README). The
+                    # corrected one excites a growing zig-zag mode at free surfaces. The
                     # normal rates keep the correction, so that the skeleton changes volume as the
                     # pore water of Eq. (24)-(25) sees it: where the support is cut (free
                     # surfaces, corners) the plain div v is about half the corrected one, the two
-                    # phases disagreed on how much the soil expanded, and suction grew at sheared
-                    # corners (issue 13; README)
+                    # phases would disagree on how much the soil expanded, and suction would
+                    # grow at sheared corners
                     l01 = s[GV_XY]
                     l10 = s[GV_YX]
                     if scheme == SCHEME_NONE:
                         # dry: no pore water to agree with, and the corrected normal rates let a
                         # block that lands on a fixed floor eject free-surface particles
-                        # (tests/test_parallel_runs.py's falling block), as the README's surface
+                        # (tests/test_parallel_runs.py's falling block), the same surface
                         # mode: the plain gradient throughout, as Bui et al. (2008)
                         l00 = gs00
                         l11 = gs11
