@@ -130,7 +130,7 @@ def make_nonlocal_strain(dim: int):
             the step's cell lists (cells of side 2h, particles in key order in a cell).
         rings : int
             cells to search on each side, >= 2 max l_c / (2h) (`rings_for`).
-        plastic_cell : int64 array
+        plastic_cell : int8 array
             scratch of at least prod(ncell) entries.
         wall_axis : int64 array
             normal axes of the walls whose images enter the sums (empty: none).

@@ -1,7 +1,9 @@
 """Initial particle state of a scene: of all particles (one process, post-processing) or
-of one slab's (each rank seeds its own, issue 15), with the same ids and bits either way.
-What needs the other ranks (global extrema, the top of each lattice column) comes through
-a reducer (psph/geometry/lattice.py); nothing here calls MPI."""
+of one slab's (each rank seeds its own, so that no rank holds the whole scene), with the
+same ids and bits either way. What needs the other ranks (global extrema, the top of each
+lattice column) comes through a reducer (psph/geometry/lattice.py); nothing here calls
+MPI. The geostatic state is Eq. (2) of Lian et al. (2023), sigma' = sigma + p I, with a
+hydrostatic p and the K0 effective stress."""
 
 import math
 
@@ -17,14 +19,37 @@ from psph.physics.material import lame
 
 def soil_positions(scene) -> np.ndarray:
     """Positions of all particles: each block's own lattice, then the domain lattice points
-    inside the polygons, meshes and layers (each point once, in lattice order)."""
+    inside the polygons, meshes and layers (each point once, in lattice order).
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+
+    Returns
+    -------
+    (n, dim) float64 array
+        positions (m).
+    """
     return seed(scene)[0]
 
 
 def material_arrays(scene, material: np.ndarray) -> dict[str, np.ndarray]:
     """Per-particle porosity, grain density and conductivity of each particle's material
-    (index array `material`): the values of its row (with one material, the scene's
-    scalars in every element)."""
+    (with one material, the scene's scalars in every element).
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+    material : (n,) array
+        each particle's material index.
+
+    Returns
+    -------
+    dict of str to (n,) float64 array
+        "porosity", "rho_s" (kg/m^3) and "k" (m/s).
+    """
     mats = scene.material_list
     idx = material.astype(np.int64)
     return {key: np.array([getattr(m, key) for m in mats], float)[idx]
@@ -33,9 +58,23 @@ def material_arrays(scene, material: np.ndarray) -> dict[str, np.ndarray]:
 
 def initial_particles(scene, reducer=SERIAL, slab: tuple[int, float, float] | None = None
                       ) -> dict[str, np.ndarray]:
-    """Positions, ids and every field's initial value of the particles in `slab` (axis,
-    lo, hi: coordinate along axis in [lo, hi)), default all of them. Collective over the
-    ranks of `reducer` (each passing its own slab)."""
+    """Positions, ids and every field's initial value of the particles in a slab, default
+    all of them. Collective over the ranks of `reducer` (each passing its own slab).
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+    reducer : reducer, optional
+        the ranks' reductions (`geometry.lattice.SERIAL`: one process).
+    slab : (axis, lo, hi), optional
+        the particles with coordinate along axis in [lo, hi) (m).
+
+    Returns
+    -------
+    dict of str to array
+        the fields by name (`state.particles.FIELDS`, SI units).
+    """
     dx = scene.particles.dx
     dim = scene.dim
     x, key, material = seed(scene, *(slab or ()), reducer=reducer, material=True)
@@ -96,7 +135,20 @@ def exposed_faces(scene, x: np.ndarray) -> np.ndarray:
     exposed: whose neighbour across the face holds no soil and is not beyond a wall of the
     box (a slip wall is a symmetry plane). A uniform pressure on them is a uniform
     confinement of any shape, exactly: the faces close the particles' union, so the
-    tractions balance and leave q inside (`loads.side = "surface"`, Cryer's sphere)."""
+    tractions balance and leave q inside (`loads.side = "surface"`, Cryer's sphere).
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+    x : (n, dim) float64 array
+        positions (m).
+
+    Returns
+    -------
+    (n, dim) float64 array
+        the area vectors (m^2 in 3D, m per unit thickness in 2D); zero rows inside.
+    """
     dx = scene.particles.dx
     dim = scene.dim
     occupied = occupancy(scene)
@@ -122,7 +174,15 @@ def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
     load q (`initial.undrained_load`): the pore water and the skeleton share the strain,
     p0 = q / (1 + n M / K_l) with M the plane-strain constrained modulus, sigma' = -(q - p0)
     along the load and nu / (1 - nu) of that across it (in plane and out of plane). The
-    reference of Terzaghi's problem starts from this state (psph/verify/terzaghi.py)."""
+    reference of Terzaghi's problem starts from this state (psph/verify/terzaghi.py).
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene (its first load is the step load, Pa).
+    data : dict of str to array
+        the fields; "stress" (Pa), "p" and "p_prev" (Pa) are set.
+    """
     m = scene.material
     load = scene.loads[0]
     lam, shear = lame(m.E, m.nu)
@@ -142,8 +202,21 @@ def undrained_load(scene, data: dict[str, np.ndarray]) -> None:
 def table_elevation(table, x: np.ndarray) -> np.ndarray:
     """Elevation of a water table given as a level (m), a phreatic profile ([[x, z], ...]
     or a CSV path, psph/geometry/profiles.py) or, in 3D, an elevation grid
-    (psph/geometry/grids.py) at the positions x (n, dim): a profile linear between its
-    points and held at its end values beyond them, a grid bilinear."""
+    (psph/geometry/grids.py): a profile linear between its points and held at its end
+    values beyond them, a grid bilinear.
+
+    Parameters
+    ----------
+    table : float, list or str
+        the level (m), the profile's points or CSV path, or the grid's path.
+    x : (n, dim) float64 array
+        positions (m).
+
+    Returns
+    -------
+    (n,) float64 array
+        the table's elevation above each position (m).
+    """
     if isinstance(table, (int, float)):
         return np.full(len(x), float(table))
     if x.shape[1] == 3:
@@ -163,11 +236,20 @@ def geostatic(scene, data: dict[str, np.ndarray], reducer=SERIAL,
     Total vertical stress: the weight of the soil above in the particle's lattice column,
     sigma_v = -g integral rho dz (tension positive) with each particle's own mixture
     density over its dx and half of its own (`overburden`); in a column of one density
-    this is -rho g d at depth d, computed so (the same bits as before several materials).
-    Eq. (2) sigma' = sigma + p I gives sigma'_v = sigma_v + p.
+    this is -rho g d at depth d, computed so. Eq. (2) sigma' = sigma + p I gives
+    sigma'_v = sigma_v + p.
 
-    `data` may be one slab's particles: `bounds` (`lattice.extent`) and `reducer` give the
-    smallest and largest x and the column tops of all of them.
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+    data : dict of str to array
+        the fields of all particles or of one slab's; "p", "p_prev" and "stress" (Pa)
+        are set.
+    reducer : reducer, optional
+        the ranks' reductions: the column tops of all particles.
+    bounds : (2, dim) float64 array, optional
+        the smallest and largest x of all particles (m; `lattice.extent`).
     """
     init = scene.initial
     if init.water_table is None and init.k0 is None:
@@ -224,7 +306,28 @@ def overburden(rho: np.ndarray, y: np.ndarray, column: np.ndarray, n_columns: in
     cumulative sum), the same additions in the same order on any number of ranks: with
     slabs cut along x a column lies on one rank; with slabs cut along y (in rank order
     upward) each rank continues the running sums the ranks above it hand down, one
-    reduction a rank (set-up only)."""
+    reduction a rank (set-up only).
+
+    Parameters
+    ----------
+    rho : (n,) float64 array
+        mixture density (kg/m^3).
+    y : (n,) float64 array
+        vertical coordinate (m).
+    column : (n,) int64 array
+        each particle's lattice column.
+    n_columns : int
+        number of columns.
+    dx : float
+        particle spacing (m).
+    reducer : reducer, optional
+        the ranks' reductions.
+
+    Returns
+    -------
+    (n,) float64 array
+        the missing weight per area divided by g (kg/m^2).
+    """
     ref = np.full(n_columns, -np.inf)
     np.maximum.at(ref, column, rho)
     ref = reducer.max(ref)  # one reference density a column, so equal rho give d = 0

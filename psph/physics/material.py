@@ -1,4 +1,6 @@
-"""Material constants derived from the scene (Section 2.2, 3.3-3.5)."""
+"""Material constants derived from the scene (Sections 2.2 and 3.3-3.5 of Lian et al.
+2023): the elastic constants of Eq. (11), the sound speeds of Eq. (28) and (41), the
+damping of Eq. (44), and the per-material table the kernels index (`material_table`)."""
 
 import math
 from dataclasses import dataclass
@@ -24,19 +26,48 @@ from psph.kernels.update import (
 
 
 def lame(E: float, nu: float) -> tuple[float, float]:
-    """Lame's lambda and the shear modulus G of Young's modulus E and Poisson's ratio nu
-    (Eq. 8's isotropic elasticity): the one place psph derives them."""
+    """Lame's lambda and the shear modulus G of the isotropic elasticity D^e of Eq. (11):
+    the one place psph derives them.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+
+    Returns
+    -------
+    lam, shear : float
+        lambda and G (Pa).
+    """
     return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
 
 
 def constrained_modulus(E: float, nu: float) -> float:
-    """M = lambda + 2 G, the oedometric (laterally confined) modulus."""
+    """M = lambda + 2 G, the oedometric (laterally confined) modulus.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+
+    Returns
+    -------
+    float
+        M (Pa).
+    """
     lam, shear = lame(E, nu)
     return lam + 2 * shear
 
 
 @dataclass(frozen=True)
 class ElasticSoil:
+    """One material's constants: E, K_l (Pa), rho_s, rho_l (kg/m^3), gamma_l (N/m^3),
+    porosity, hydraulic conductivity (m/s)."""
+
     E: float
     nu: float
     rho_s: float
@@ -48,40 +79,71 @@ class ElasticSoil:
 
     @property
     def shear(self) -> float:
+        """Shear modulus G (Pa)."""
         return lame(self.E, self.nu)[1]
 
     @property
     def lam(self) -> float:
+        """Lame's lambda (Pa)."""
         return lame(self.E, self.nu)[0]
 
     @property
     def constrained_modulus(self) -> float:
+        """M = lambda + 2 G (Pa)."""
         return constrained_modulus(self.E, self.nu)
 
     @property
     def sound_speed(self) -> float:
-        """c_sp = sqrt(E / rho_s), Eq. (41); also the artificial-viscosity sound speed."""
+        """c_sp = sqrt(E / rho_s) of Eq. (41) (m/s); also the artificial-viscosity sound
+        speed."""
         return math.sqrt(self.E / self.rho_s)
 
     @property
     def undrained_sound_speed(self) -> float:
-        """c_sp = sqrt((K_l / n + 4 G / 3) / (n rho_l + n_s rho_s)), Eq. (28)."""
+        """c_sp = sqrt((K_l / n + 4 G / 3) / (n rho_l + n_s rho_s)) of Eq. (28) (m/s)."""
         return math.sqrt((self.K_l / self.porosity + 4.0 * self.shear / 3.0)
                          / self.mixture_density)
 
     def damping_coefficient(self, eta_d: float, h: float) -> float:
-        """c_d = eta_d sqrt(E / (rho_s h^2)), Eq. (44) (1/s)."""
+        """The damping coefficient c_d = eta_d sqrt(E / (rho_s h^2)) of Eq. (44).
+
+        Parameters
+        ----------
+        eta_d : float
+            damping ratio eta_d (dimensionless).
+        h : float
+            smoothing length (m).
+
+        Returns
+        -------
+        float
+            c_d (1/s).
+        """
         return eta_d * math.sqrt(self.E / (self.rho_s * h * h))
 
     @property
     def mixture_density(self) -> float:
+        """(1 - n) rho_s + n rho_l (kg/m^3)."""
         n = self.porosity
         return (1 - n) * self.rho_s + n * self.rho_l
 
 
 def plasticity_parameters(scene, material=None) -> np.ndarray:
-    """(phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) for the kernels, angles in radians
-    (Eq. 17-19); zeros for an elastic material. `material`: default the scene's first."""
+    """The softening parameters of Eq. (17)-(19) for the kernels.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+    material : Material, optional
+        default the scene's first.
+
+    Returns
+    -------
+    (7,) float64 array
+        (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f), angles in rad, cohesions in Pa; zeros
+        for an elastic material.
+    """
     pl = (scene.material if material is None else material).plasticity
     if pl is None:
         return np.zeros(7)
@@ -92,29 +154,60 @@ def plasticity_parameters(scene, material=None) -> np.ndarray:
 
 
 def soil_from_scene(scene, material=None) -> ElasticSoil:
-    """The constants of one material (default: the first; its fluid is every one's)."""
+    """The constants of one material.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+    material : Material, optional
+        default the first (whose pore fluid is every material's).
+
+    Returns
+    -------
+    ElasticSoil
+    """
     m = scene.material if material is None else material
     return ElasticSoil(E=m.E, nu=m.nu, rho_s=m.rho_s, rho_l=m.rho_l, K_l=m.K_l,
                        gamma_l=m.rho_l * m.g_ref, porosity=m.porosity, conductivity=m.k)
 
 
 def tension_cutoff(material) -> float:
-    """The cap on the mean effective stress (Pa, tension positive) of `dp_return`: the
-    material's `plasticity.tension_cutoff`, inf without one (the apex of Eq. 14)."""
+    """The cap on the mean effective stress of `dp_return`.
+
+    Parameters
+    ----------
+    material : Material
+        a scene material.
+
+    Returns
+    -------
+    float
+        its `plasticity.tension_cutoff` (Pa, tension positive); inf without one (the apex
+        of Eq. 14 bounds sigma'_m).
+    """
     pl = material.plasticity
     return math.inf if pl is None or pl.tension_cutoff is None else pl.tension_cutoff
 
 
 def material_table(scene) -> np.ndarray:
-    """(n_materials, MAT_COLUMNS) float64: the row of each material, indexed by the
-    particle field `material`, in the column layout of psph/kernels/update.py (MAT_*):
-    Lame constants and 3K = 3 lambda + 2 mu (Eq. 11), rho_s (Eq. 24 with Eq. 8), k and
-    C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager material and its
-    (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19), with l_c and m of its
-    non-local softening strain (0: local; issue 17), its tension cut-off (inf: none;
-    issue 13) and 1 for the Lode-dependent Mohr-Coulomb cone (issue 37). The values are
-    the same floats as the scalars the kernels took before several materials (issue
-    16)."""
+    """The material table the kernels index by the particle field `material`.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+
+    Returns
+    -------
+    (n_materials, MAT_COLUMNS) float64 array
+        one row a material in the column layout of psph/kernels/update.py (MAT_*): Lame
+        constants and 3K = 3 lambda + 2 mu (Eq. 11; Pa), rho_s (Eq. 24 with Eq. 8;
+        kg/m^3), k (m/s) and C_k of Eq. (4), the porosity floor, 1 for a Drucker-Prager
+        material and its (phi_p, phi_r, c_p, c_r, psi_0, eta, s_f) of Eq. (17)-(19), l_c
+        (m) and m of its non-local softening strain (0: local), its tension cut-off (Pa;
+        inf: none) and 1 for the Lode-dependent Mohr-Coulomb cone.
+    """
     mats = scene.material_list
     table = np.zeros((len(mats), MAT_COLUMNS))
     for i, m in enumerate(mats):
@@ -142,23 +235,67 @@ def stiffest(scene) -> ElasticSoil:
     """The material with the fastest solid wave sqrt(E / rho_s) of Eq. (41): the
     artificial viscosity's sound speed and the damping coefficient of Eq. (44) are taken
     from it (one value for every pair and particle, the largest over the materials; the
-    first material when it is the only one). Ties: the first."""
+    first material when it is the only one). Ties: the first.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+
+    Returns
+    -------
+    ElasticSoil
+    """
     mats = scene.material_list
     speeds = [math.sqrt(m.E / m.rho_s) for m in mats]
     return soil_from_scene(scene, mats[speeds.index(max(speeds))])
 
 
 def fastest_undrained(scene) -> float:
-    """The largest undrained c_sp of Eq. (28) over the materials."""
+    """The largest undrained sound speed c_sp of Eq. (28) over the materials.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+
+    Returns
+    -------
+    float
+        c_sp (m/s).
+    """
     return max(soil_from_scene(scene, m).undrained_sound_speed for m in scene.material_list)
 
 
 def material_row(lam: float = 0.0, shear: float = 0.0, rho_s: float = 0.0, k: float = 0.0,
                  c_k: float = 0.0, n_min: float = 0.0, dp: np.ndarray | None = None,
                  bulk3: float | None = None, tension: float = math.inf) -> np.ndarray:
-    """A one-material table (1, MAT_COLUMNS) from constants, for kernels called outside a
-    run (the element tests, unit tests); dp: the 7 Drucker-Prager parameters or None
-    (elastic); bulk3 default 3 lambda + 2 mu; tension: the cut-off of sigma'_m."""
+    """A one-material table from constants, for kernels called outside a run (the element
+    tests, unit tests).
+
+    Parameters
+    ----------
+    lam, shear : float
+        Lame constants lambda and mu (Pa).
+    rho_s : float
+        grain density (kg/m^3).
+    k : float
+        hydraulic conductivity (m/s).
+    c_k : float
+        C_k of Eq. (4); 0: constant k.
+    n_min : float
+        porosity floor (0: none).
+    dp : (7,) float64 array, optional
+        the Drucker-Prager parameters of `plasticity_parameters`; None: elastic.
+    bulk3 : float, optional
+        3K (Pa), default 3 lambda + 2 mu.
+    tension : float
+        the cut-off of sigma'_m (Pa); inf: none.
+
+    Returns
+    -------
+    (1, MAT_COLUMNS) float64 array
+    """
     row = np.zeros((1, MAT_COLUMNS))
     row[0, [MAT_LAM, MAT_SHEAR, MAT_RHO_S, MAT_K, MAT_C_K, MAT_N_MIN]] = \
         (lam, shear, rho_s, k, c_k, n_min)

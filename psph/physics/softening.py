@@ -1,5 +1,5 @@
-"""The regularised softening stage (issue 17, item 1): the over-non-local equivalent
-plastic strain that drives Eq. (17)-(19) for the materials with
+"""The regularised softening stage: the over-non-local equivalent plastic strain that
+drives the softening of Eq. (17)-(19) of Lian et al. (2023) for the materials with
 `plasticity.regularisation` (psph/kernels/nonlocal_strain.py); the other materials keep
 the local law. The averaging reads eps_p of the halo rows, which `exchange` sends with
 the full state: the halo is at least 2 l_c deep (`reach`, taken by `boundary.halo_width`),
@@ -18,7 +18,18 @@ def _regularisations(scene) -> list:
 
 
 def reach(scene) -> float:
-    """Support radius 2 l_c of the widest regularisation (m); 0 without any."""
+    """The support radius 2 l_c of the widest regularisation.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene.
+
+    Returns
+    -------
+    float
+        2 l_c (m); 0 without any regularised material.
+    """
     return max((2.0 * r.length for r in _regularisations(scene) if r is not None),
                default=0.0)
 
@@ -29,7 +40,19 @@ class NonlocalSoftening:
 
     def __init__(self, scene, cell_size: float, wall_axis: np.ndarray,
                  wall_pos: np.ndarray):
-        """wall_axis, wall_pos: the walls whose mirror images enter the averages."""
+        """The stage of a scene.
+
+        Parameters
+        ----------
+        scene : Scene
+            the validated scene.
+        cell_size : float
+            side of the step's cells (m).
+        wall_axis : int array
+            normal axes of the walls whose mirror images enter the averages.
+        wall_pos : float array
+            their positions (m).
+        """
         regs = _regularisations(scene)
         self.wall_axis = np.asarray(wall_axis, np.int64)
         self.wall_pos = np.asarray(wall_pos, float)
@@ -40,13 +63,22 @@ class NonlocalSoftening:
         self.plastic_cell = np.zeros(0, np.int8)  # cells holding plastic strain (scratch)
 
     def name(self) -> str:
+        """The stage's name in the progress output, with its internal lengths (m)."""
         lc = ", ".join(f"{v:g}" for v in self.lengths if v > 0.0)
         return f"nonlocal_eps_p[l_c {lc} m]"
 
     def average(self, store, cell_of: np.ndarray, cell_start: np.ndarray,
                 order: np.ndarray, ncell: np.ndarray) -> None:
         """eps_hat of the owned rows from this step's cell lists (positions unchanged
-        since the neighbour search)."""
+        since the neighbour search), into `self.eps_hat`.
+
+        Parameters
+        ----------
+        store : ParticleStore
+            the particles (owned, halo with eps_p, boundary rows).
+        cell_of, cell_start, order, ncell : int64 arrays
+            the step's cell lists (cells of side 2h).
+        """
         st = store
         if self.eps_hat.shape[0] < st.cap:
             self.eps_hat = np.zeros(st.cap)
@@ -61,6 +93,16 @@ class NonlocalSoftening:
 
 def nonlocal_softening(scene, cell_size: float, wall_axis: np.ndarray,
                        wall_pos: np.ndarray) -> NonlocalSoftening | None:
-    """The stage's state, or None when no material is regularised (the local law)."""
+    """The stage's state, or None when no material is regularised (the local law).
+
+    Parameters
+    ----------
+    scene, cell_size, wall_axis, wall_pos
+        as `NonlocalSoftening`.
+
+    Returns
+    -------
+    NonlocalSoftening or None
+    """
     return NonlocalSoftening(scene, cell_size, wall_axis, wall_pos) \
         if reach(scene) > 0.0 else None
