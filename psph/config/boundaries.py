@@ -1,6 +1,6 @@
 """Scene models of the boundaries: the sides of the domain box (mirror ghosts,
-`kernels/ghosts.py`), rigid polylines (2D, issue 16) and rigid surfaces (3D, issue 37)
-lined with boundary particles (`psph/solver/boundary.py`).
+`kernels/ghosts.py`), rigid polylines (2D) and rigid surfaces (3D) lined with boundary
+particles, the virtual particles of Lian et al. (2023) (`psph/solver/boundary.py`).
 
 A polyline is given by its points [[x, z], ...] (inline or a CSV file, as the ground
 profiles of `geometry/profiles.py`) and the side the soil is on: "above" or "below" for a
@@ -193,10 +193,10 @@ class Boundaries(_Model):
     front: Boundary = Field(Boundary(), description="3D only: the side y = domain.min[1] "
                             "(bottom and top are then z = domain.min[2], domain.max[2])")
     back: Boundary = Field(Boundary(), description="3D only: the side y = domain.max[1]")
-    polylines: list[Polyline] = Field([], description="Rigid polylines lined with boundary "
-                                      "particles (issue 16)")
+    polylines: list[Polyline] = Field([], description="2D only: rigid polylines lined with "
+                                      "boundary particles")
     surfaces: list[Surface] = Field([], description="3D only: rigid surfaces lined with "
-                                    "boundary particles (issue 37)")
+                                    "boundary particles")
 
     @model_validator(mode="after")
     def _symmetry(self) -> "Boundaries":

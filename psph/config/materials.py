@@ -1,7 +1,7 @@
-"""The soil materials of a scene (Section 2.2): one `[material]` table, or several
-`[[materials]]` tables by name that the particle sources pick with `material = "name"`
-(issue 16). Validation raises `_Rule` (key, value, rule), which `psph.config.load.validate`
-turns into one line and exit 2."""
+"""The soil materials of a scene (Section 2.2 of Lian et al. 2023): one `[material]`
+table, or several `[[materials]]` tables by name that the particle sources pick with
+`material = "name"`. Validation raises `_Rule` (key, value, rule), which
+`psph.config.load.validate` turns into one line and exit 2."""
 
 from typing import Annotated, Literal
 
@@ -20,7 +20,7 @@ class _Model(BaseModel):
 
 
 class Regularisation(_Model):
-    """Regularised (mesh-objective) softening (issue 17): Eq. (17)-(19) driven by the
+    """Regularised (mesh-objective) softening: Eq. (17)-(19) driven by the
     over-non-local equivalent plastic strain eps_hat = (1 - m) eps_p + m eps_bar, eps_bar
     the average of eps_p with the cubic spline of smoothing length `length` (support
     2 length; psph/kernels/nonlocal_strain.py). `length` is the internal length l_c in
@@ -54,13 +54,15 @@ class Plasticity(_Model):
     s_f: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Decay rate of the dilation angle, Eq. (19); 0 keeps ψ0 [-]")
     regularisation: Regularisation | None = Field(
-        None, description="Non-local softening (issue 17); none keeps the local law")
-    # issue 37: in 3D the plane-strain cone is a third weaker in triaxial compression
+        None, description="Non-local softening of Eq. (17)–(19), so that a shear band's "
+        "width is set by an internal length, not by dx; none keeps the local law")
+    # in 3D the plane-strain cone of Eq. (16) is a third weaker in triaxial compression
     surface: Literal["plane_strain", "mohr_coulomb"] = Field(
         "plane_strain", description="Yield cone: \"plane_strain\", Eq. (16)'s fit (the "
         "paper's); \"mohr_coulomb\", the cone through Mohr–Coulomb at each stress's Lode "
         "angle (the same φ and c in every stress state, for 3D)")
-    # issue 13; none is the paper's law
+    # none is the paper's law; 0 keeps a contractive soil at low confinement from
+    # moving its total stress onto the pore water
     tension_cutoff: Annotated[float, Field(ge=0.0)] | None = Field(
         None, description="Largest mean effective stress σ'_m carried (tension positive); "
         "none keeps the apex c cot φ of Eq. (14) [Pa]")
