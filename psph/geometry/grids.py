@@ -1,4 +1,4 @@
-"""Elevation grids of 3D scenes (issue 38): a ground surface, a layer interface, a bedrock
+"""Elevation grids of 3D scenes: a ground surface, a layer interface, a bedrock
 or a water table as z(x, y) on a regular grid of nodes, the way digital elevation models
 and interpolated borehole surfaces come.
 

@@ -1,4 +1,5 @@
-"""The scene's particle lattice without building it whole (issue 15, item 1).
+"""The scene's particle lattice without building it whole: each rank seeds only its own
+slab, so that no rank holds the whole scene.
 
 Global order of the particles (their ids): each block's own lattice in row-major order
 (x fastest), blocks in scene order, then the points of the domain lattice inside the
@@ -138,7 +139,7 @@ class Fill3D:
         self.cylinders = [(np.array(cy.base, float), cy.radius, cy.height)
                           for cy in pa.cylinders]
         axes = lattice_axes(scene.domain.min, scene.domain.max, dx)
-        # soil between elevation grids, z at every lattice column (issue 38)
+        # soil between elevation grids, z at every lattice column
         self.layers = [check_layer_grids(layer, f"particles.layers[{il}]", axes[0], axes[1])
                        for il, layer in enumerate(pa.layers)]
         self.indices = [material_index(scene, m.material)

@@ -1,4 +1,4 @@
-"""Boundary particles along polylines (issue 16): the virtual particles of the paper's
+"""Boundary particles along polylines: the virtual particles of the paper's
 ref. [11] (Bui et al. 2008), several rows deep, fixed in space.
 
 Each segment of a polyline carries rows k = 0, 1, ... at distances (k + 1/2) dx from the

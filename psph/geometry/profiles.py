@@ -1,4 +1,4 @@
-"""Ground profiles of a cross-section (issue 16): a polyline z(x) given inline as [x, z]
+"""Ground profiles of a cross-section: a polyline z(x) given inline as [x, z]
 points or as a CSV file of x, z rows (the way survey sections come), and the soil layer
 between a top and a bottom profile.
 

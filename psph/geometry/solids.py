@@ -1,4 +1,4 @@
-"""Soil volumes of 3D scenes from closed surface meshes (issue 37): any surface meshio
+"""Soil volumes of 3D scenes from closed surface meshes: any surface meshio
 reads (STL, OBJ, PLY, VTK, ...) made of triangles or quads, which must be closed (every
 edge shared by exactly two faces); the points of the domain lattice inside it are soil.
 

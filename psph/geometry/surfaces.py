@@ -1,4 +1,4 @@
-"""Boundary particles of rigid surfaces in 3D (issue 37): the 3D form of the polylines'
+"""Boundary particles of rigid surfaces in 3D: the 3D form of the polylines'
 virtual particles (`polylines.py`), from a triangle surface (a mesh file meshio reads,
 or vertices and triangles given inline).
 
