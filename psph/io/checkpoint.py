@@ -11,11 +11,12 @@ time: the slab cuts come from the shares' coordinates (the same bits as `slab_cu
 all of them), and each row goes to the rank owning it. No rank holds an array of all
 particles or of all ids.
 
-Format changes (still `psph-checkpoint-1`): since issue 15 the ids removed by `remove`
-regions are stored as `removed_ids` (int64, in no particular order; meta `n_removed`)
-instead of the `alive` mask (uint8, one per id). Checkpoints with `alive` still restart.
-An older psph restarts a new checkpoint only if nothing was removed (it reads a missing
-`alive` as all alive).
+Removed particles (format `psph-checkpoint-1`): the ids removed by `remove` regions are
+stored as `removed_ids` (int64, in no particular order; meta `n_removed`), not as a mask
+one entry per id, which would be as long as all ids. A checkpoint holding the `alive`
+mask (uint8, one per id) instead also restarts; a reader that knows only `alive` restarts
+a checkpoint with `removed_ids` only if nothing was removed (it reads a missing `alive`
+as all alive).
 """
 
 import json

@@ -1,5 +1,5 @@
-"""Collective HDF5 snapshots (h5py mpio driver) in the schema of DESIGN.md, and the XDMF
-sidecar that opens them in ParaView."""
+"""Collective HDF5 snapshots (h5py mpio driver), `/snapshots/<step>` with one dataset a
+field (docs/guide/outputs.md), and the XDMF sidecar that opens them in ParaView."""
 
 from pathlib import Path
 
@@ -9,7 +9,8 @@ import numpy as np
 import psph
 from psph.errors import SceneError
 
-# Output field -> (unit, description); shapes follow DESIGN.md.
+# Output field -> (unit, description); shapes (n,), or (n, dim) for vectors and (n, 6) for
+# the stress.
 SNAPSHOT_FIELDS = {
     "id": ("1", "stable global particle id"),
     "x": ("m", "position"),
