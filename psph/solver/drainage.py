@@ -1,4 +1,4 @@
-"""Where the drained sides of a scene hold p = 0 (issue 14, item 3).
+"""Where the drained sides of a scene hold p = 0.
 
 `pressure.drained_boundary = "mirror"` (default): p = 0 on the side's true surface. A wall
 side (fixed or slip, with mirror ghosts) gets it from its ghosts, whose pore pressure is
@@ -7,8 +7,8 @@ antisymmetric images across a plane (`kernels/images.py`) that starts on the soi
 surface (outer particle layer + dx/2) and follows that layer's mean displacement.
 
 `"layer"`: p = 0 imposed on the outer particle layer (`drained_from` of the particles), dx/2
-inside the surface: the condition psph had before. It suits a drained side that does not
-stay a plane (the saturated collapses' top, which falls apart).
+inside the surface, a drainage path dx/2 short. It suits a drained side that does not stay
+a plane (the saturated collapses' top, which falls apart).
 """
 
 import math

@@ -46,8 +46,8 @@ class ExactDots:
         if self._values.shape[0] < k:
             self._values = np.zeros(k)
         values = self._values[:k]
-        # one compiled call for all the rows (a CG iteration on several ranks is latency-
-        # bound: issue 36)
+        # one compiled call for all the rows (a CG iteration on several ranks is
+        # latency-bound)
         a = tuple(p[0] for p in pairs)
         b = tuple(p[1] for p in pairs)
         dot_chunk_rows(a, b, n, rows, self._terms)
