@@ -47,14 +47,14 @@ _FIELDS: tuple[Field, ...] = (
     Field("vol0", 1, "m^2", "initial volume", False),
     Field("eps_p", 1, "1", "equivalent plastic strain", False),
     Field("plastic_work", 1, "J/m^3", "dissipated plastic work sigma' : d eps_p, "
-          "accumulated (Eq. 13-15; issue 17)", False),
+          "accumulated (Eq. 13-15 of Lian et al. 2023)", False),
     Field("drained_from", 1, "s", "time from which p = 0 is imposed (inf: never)", False),
     Field("surface", 1, "1", "1 on the loaded surface layer (settlement diagnostics)", False),
     Field("load_index", 1, "1", "index of the surface load acting on the particle, or -1", False),
     Field("traction", VECTOR, "m", "outward tributary area vector -n dA of a loaded particle",
           False),
     Field("material", 1, "1", "index of the particle's material in the scene's list "
-          "(0: the one [material], or the first of [[materials]]; issue 16)", False),
+          "(0: the one [material], or the first of [[materials]])", False),
 )
 
 
