@@ -75,8 +75,8 @@ def successive_slides(times: np.ndarray, scarps: np.ndarray, h0: float,
     creep, the median rate over all intervals: a slide is a run of consecutive intervals
     retreating faster than twice that, with a total retreat of at least `min_retreat`.
     Where the scarp stands still between slides the median is 0 and any retreat counts;
-    where it creeps between them (the K0 = 0.5 slope after issue 13: 1.6-4.8 m/s, with
-    bursts of 11-14 m/s) only the bursts do.
+    where it creeps between them (the K0 = 0.5 slope: 1.6-4.8 m/s, with bursts of
+    11-14 m/s) only the bursts do.
     Returns the count, the time and new scarp position of each slide, and the threshold.
     """
     front = np.minimum.accumulate(scarps)
@@ -147,8 +147,8 @@ def slides_from(times: np.ndarray, scarps: np.ndarray, h0: float, dx: float) -> 
 def collapse_verification(path, scene, comm) -> dict:
     """The `metrics` block of a collapse or slope run from its snapshots `path`
     (particles.h5): the collapse metrics of the last snapshot, the slides over all of
-    them, the time series of the metrics (`series`: one entry a snapshot; README,
-    "Collapse metrics") and, for a coupled run, the pressure quality (Sections 4.4-4.5).
+    them, the time series of the metrics (`series`: one entry a snapshot;
+    docs/vv/metrics.md) and, for a coupled run, the pressure quality (Sections 4.4-4.5).
     Collective: each rank reads its share of each snapshot's rows in turn (no rank holds
     a snapshot or any array as long as the particle count; psph/verify/distributed.py)."""
     dx = scene.particles.dx

@@ -1,4 +1,4 @@
-"""Metrics of an axisymmetric granular collapse in 3D (issue 37, scene `collapse_3d`)
+"""Metrics of an axisymmetric granular collapse in 3D (scene `collapse_3d`)
 against the experimental scaling of Lube, Huppert, Sparks and Hallworth (2004,
 "Axisymmetric collapses of granular columns", J. Fluid Mech. 508): for a column of
 radius r_i and height h_i, a = h_i / r_i, the run-out

@@ -1,5 +1,5 @@
 """Observed order of convergence and Richardson extrapolation of a metric over three
-refinements (issue 17: `bench/verification/convergence.py`). With f1, f2, f3 the values at the
+refinements (`bench/verification/convergence.py`). With f1, f2, f3 the values at the
 coarse, middle and fine resolution and a constant ratio r between them,
 
     p = ln((f1 - f2) / (f2 - f3)) / ln r,    f* = f3 + (f3 - f2) / (r^p - 1)

@@ -1,5 +1,5 @@
 """Cryer's sphere (Cryer 1963; Verruijt, Theory and Problems of Poroelasticity, Sect. 3.3):
-the reference of the 3D scene `cryer` (issue 37).
+the reference of the 3D scene `cryer`.
 
 A saturated sphere of radius a, its surface drained (p = 0), takes a sudden uniform
 confining pressure q at t = 0. With incompressible grains and the pore fluid's storage

@@ -1,7 +1,8 @@
-"""Snapshot metrics over the ranks without a global array (issue 15): each rank reads its
-share of a snapshot's rows, order statistics come from the slab cuts' bisection of counts
-(`order_statistics`), extremes
-from one small gather, and a neighbour sum from the rows of a slab of x with a halo.
+"""Snapshot metrics over the ranks without a global array (so that no rank holds a whole
+snapshot, whatever the particle count): each rank reads its share of a snapshot's rows,
+order statistics come from the slab cuts' bisection of counts (`order_statistics`),
+extremes from one small gather, and a neighbour sum from the rows of a slab of x with a
+halo.
 
 Every function is collective over `comm` (an mpi4py communicator; `MPI.COMM_SELF` for one
 process, where the results are those of the serial numpy expressions bit for bit:

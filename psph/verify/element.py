@@ -27,8 +27,9 @@ v); dp/dt = -(K_l/n) e_v (Eq. 25 without flow); p = 0 drained. Both use the same
 servo (`servo_step`).
 
 By default `advance` takes the shear rate and spin of the stress rate from the plain
-(uncorrected) kernel gradient L M (`correct_strain=False`, README "Surface mode") and the
-normal rates from the corrected gradient. On the lattice the moment matrix M of Eq. (22)
+(uncorrected) kernel gradient L M (`correct_strain=False`: the corrected one grows a
+zig-zag mode at free surfaces, `update.make_advance`) and the normal rates from the
+corrected gradient. On the lattice the moment matrix M of Eq. (22)
 is 0.9908 I instead of I (h = 1.2 dx), so in simple shear the shear stress rate is 0.9 %
 slow and the SPH p ends up to about 1 % of its peak below the reference.
 `reference_element(..., moment=moment_history(sph))` takes the M(t) measured at the

@@ -1,5 +1,6 @@
 """One particle's pore pressure against its neighbours, and the terms of Eq. (26) that
-hold it there, from the snapshots of a run (issue 13, README cause 12).
+hold it there, from the snapshots of a run: the diagnosis of single-particle pressure
+spikes in a disordered basal layer (`kernels/shifting.py`).
 
 For the particle `id` at each snapshot (serial, numpy; walls mirrored as
 `kernels/ghosts.py` does: positions mirrored, p shifted by the hydrostatic difference on an

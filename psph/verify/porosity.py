@@ -1,4 +1,5 @@
-"""Porosity of a Drucker-Prager run against the flow rule's own bound (issue 13).
+"""Porosity of a Drucker-Prager run against the flow rule's own bound, Eq. (15) and (19)
+of Lian et al. (2023).
 
 A contractive soil (psi < 0) compacts plastically by d eps_v = 3 sqrt(3) xi_psi d eps_p
 (plastic potential Eq. 15, multiplier d lambda = sqrt(3) d eps_p, `plasticity.dp_return`),
@@ -10,8 +11,8 @@ without elastic strain, is
 
 A particle well below n_law has compacted by a strain the constitutive law does not
 produce (elastic compaction is about p' / K, 1e-3 for 10 kPa in the Section 4.5 clay):
-numerical. The slopes' porosity floor clipped such particles until the stress filter's
-cause was found (README, "How the runs were made to finish").
+numerical, e.g. a stress filter that erases the stress resisting the compaction
+(`update.porosity_follows_stress_filter`).
 
 `python -m psph.analysis.porosity OUT [OUT ...]` prints, for every snapshot at a multiple of
 5 s: the lowest n, the largest deficit n_law - n with its particle, and how many particles

@@ -5,7 +5,7 @@ snapshots, on rank 0 in post-processing (numpy only).
   particle's current position (what the paper's Figs. 14-17, 20 and 24 show);
 - its percentiles and extremes at each snapshot;
 - a checkerboard index of p and of the mean effective stress p' = -(s'xx + s'yy + s'zz)/3:
-  the particle-scale, odd-even noise the README reports in the debris (cf. the pressure
+  the particle-scale, odd-even noise of the debris (cf. the pressure
   noise of the unstabilised run, Fig. 22, and the Shepard filter Eq. (46));
 - the excess over the current phreatic line (`phreatic_excess`: drainage through a free
   face is not read as negative excess) and the suction max(-p, 0): their 99th

@@ -1,6 +1,6 @@
-"""The basal strength of the sliding block (issue 13): the Drucker-Prager shear strength
-of a row of particles at its normal effective stresses, Eq. (14)-(18). The block itself
-is built and run by `psph.app.sliding`."""
+"""The basal strength of a sliding block: the Drucker-Prager shear strength of a row of
+particles at its normal effective stresses, Eq. (14)-(18) of Lian et al. (2023). The
+block itself is built and run by the study `bench/studies/sliding.py`."""
 
 import numpy as np
 

@@ -1,4 +1,4 @@
-"""Metrics of a 3D slope failure (issue 38, scene `slope_3d`): the 2D metrics of Section
+"""Metrics of a 3D slope failure (scene `slope_3d`): the 2D metrics of Section
 4.5 read on the centre line's section, and what only a plan shows.
 
 - On the centre line (a 2 dx wide strip at the front symmetry plane of a half model, or

@@ -1,5 +1,5 @@
 """What the fixed base under the Section 4.5 slope's face carries after the gravity
-loading, and how close to the clay's peak strength that is (issue 38).
+loading, and how close to the clay's peak strength that is.
 
 Horizontal equilibrium of the soil right of a vertical section x = x_c through the crest:
 the face is free and drained (p = 0 on it, the water table at the ground surface of
