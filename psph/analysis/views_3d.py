@@ -1,4 +1,4 @@
-"""Pictures of a 3D run (issue 37), drawn with matplotlib: a vertical section through the
+"""Pictures of a 3D run, drawn with matplotlib: a vertical section through the
 mass, a plan view of the deposit (its footprint coloured by thickness), and a perspective
 view, each of the last snapshot coloured by a field."""
 
