@@ -1,7 +1,9 @@
-"""Command line (DESIGN.md): run, list, validate, plot, export. Exit codes: 0 done, 1 other
-error, 2 bad input, 3 numerical failure, 74 output file system full (the last checkpoint
-named), 75 stopped by a signal after writing a checkpoint
-(rerun with --restart). Only rank 0 prints. Nothing numerical here."""
+"""psph, coupled flow-deformation SPH of saturated soil: run, list, validate, plot, export.
+
+Exit codes (docs/guide/exit_codes.md): 0 done, 1 other error, 2 bad input, 3 numerical
+failure, 74 output file system full (the last checkpoint named), 75 stopped by a signal
+after writing a checkpoint (rerun with --restart). Only rank 0 prints. Nothing numerical
+here."""
 
 import argparse
 import sys

@@ -1,24 +1,18 @@
 """Will the scene's particles fit in this node's memory? Checked before a run reads a
-checkpoint, seeds a particle or writes anything (issue 37: a 3D scene whose particle
-count would not fit is bad input, exit 2, one line, nothing written)."""
+checkpoint, seeds a particle or writes anything: a scene whose particle count would not
+fit is bad input (exit 2, one line, nothing written), not a crash hours into a job."""
 
 from psph.errors import SceneError
 from psph.geometry.lattice import estimate_count
 
 # Bytes a particle at least, by (dim, coupled): the running state per owned particle
-# (`Simulation.state_bytes`: the particle store, scratch, neighbour and pair lists)
-# measured by `make bench` on 2026-12-05 after the pair sums were sized by the owned
-# rows, the pair lists by the step's pairs (int32) and the store by the owned particles
-# and a quarter (docs/performance.md, "Memory per particle"): the coupled elastic TPI
-# step 929-945 B in 2D and 2,772-3,277 B in 3D, the dry 3D collapse 1,063-1,344 B (and
-# on 2026-12-06, with the 3D pair sweep's grid of side h: the coupled 3D step 2,330 B at
-# h = 1.2 dx, every shipped 3D scene's, 2,793-3,315 B at 1.3 dx, the collapse
-# 1,088-1,375 B, so the 3D coupled bound is now that of h = 1.2 dx); a dry
-# 2D scene's whole peak 695 B before them (the 9.9M-particle collapse at 6.39 GiB on one
-# rank, "Ten million particles"; its state is now 688 B at 80,000 particles). Rounded
-# down: the peak resident memory is above the state (the interpreter, numba and MPI,
-# about 190 MB a rank; the snapshot and checkpoint writes; the projection's per-pair
-# weights), so the check refuses only what clearly cannot run.
+# (`Simulation.state_bytes`: the particle store, scratch, neighbour and pair lists) as
+# `make bench` measures it (docs/performance.md): the coupled elastic TPI step 929-945 B
+# in 2D; in 3D 2,330 B at h = 1.2 dx (every shipped 3D scene's) and 2,793-3,315 B at
+# 1.3 dx; the dry 3D collapse 1,088-1,375 B; a dry 2D scene 688 B. Rounded down: the peak
+# resident memory is above the state (the interpreter, numba and MPI, about 190 MB a
+# rank; the snapshot and checkpoint writes; the projection's per-pair weights), so the
+# check refuses only what clearly cannot run.
 STATE_BYTES_PER_PARTICLE = {(2, True): 900, (2, False): 650, (3, True): 2_300,
                             (3, False): 1_000}
 

@@ -1,4 +1,4 @@
-"""The restart rule: a restart continues the same physics (DESIGN.md, checkpoint/restart).
+"""The restart rule: a restart continues the same physics (docs/guide/restart_clusters.md).
 Only scheduling sections may differ from the scene stored in the checkpoint."""
 
 import tomllib
