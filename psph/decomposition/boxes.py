@@ -1,4 +1,4 @@
-"""Boxes along two axes (issue 38): the domain cut into n0 slabs along axis a0, each slab
+"""Boxes along two axes: the domain cut into n0 slabs along axis a0, each slab
 cut into n1 boxes along a1, one box a rank (rank = slab n1 + box). The cuts are a
 recursive coordinate bisection of the particles: slabs of equal counts, then boxes of
 equal counts within each slab (`balance.balanced_cuts`), so the boxes of neighbouring
