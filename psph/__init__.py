@@ -1,4 +1,16 @@
-"""psph: MPI-parallel SPH for coupled flow-deformation of saturated soils."""
+"""psph: MPI-parallel SPH for coupled flow-deformation of saturated soils.
+
+It implements the single-layer (u - p_l) SPH framework, with its three-point integration
+(TPI) of the pore pressure and its stabilisation, of
+
+    Lian, Y., Bui, H. H., Nguyen, G. D. and Haque, A. (2023). An effective and stabilised
+    (u - p_l) SPH framework for large deformation and failure analysis of saturated
+    porous media. Computer Methods in Applied Mechanics and Engineering, 115967.
+    doi:10.1016/j.cma.2023.115967
+
+"Eq. (n)", "Section n" and "Fig. n" in the package's docstrings and comments are that
+paper's unless another source is named.
+"""
 
 import hashlib
 import os
@@ -22,9 +34,9 @@ def _key_numba_cache() -> None:
     """Point numba's on-disk cache (`cache=True`) at a directory keyed by the kernels'
     sources. numba re-validates a cached function against its own file only, not
     against the njit functions it calls from other files, so an edited
-    `plasticity.dp_return` left `update.advance` running the old one from the cache
-    (2026-11-30). With one directory per source hash any change to a numba file
-    compiles every kernel once. Parent: $NUMBA_CACHE_DIR if the user set one, else
+    `plasticity.dp_return` would leave `update.advance` running the old one from the
+    cache. With one directory per source hash any change to a numba file compiles every
+    kernel once. Parent: $NUMBA_CACHE_DIR if the user set one, else
     $XDG_CACHE_HOME/psph/numba (~/.cache/psph/numba)."""
     base = os.environ.get("PSPH_NUMBA_CACHE_PARENT") or os.environ.get("NUMBA_CACHE_DIR")
     if not base:

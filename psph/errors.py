@@ -1,4 +1,4 @@
-"""Errors that map to the exit codes of DESIGN.md."""
+"""Errors that map to the command line's exit codes (docs/guide/exit_codes.md)."""
 
 
 class SceneError(Exception):
