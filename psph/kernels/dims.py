@@ -4,7 +4,7 @@ A kernel is a factory `make_<kernel>(dim)` whose compiled function closes over `
 the column starts of `sum_columns.sum_layout(dim)`: numba sees them as constants, so the
 loops `for m in range(dim)` unroll and the 2D specialisation performs the plane-strain
 operations in the same order as a kernel written for 2D alone (the same bits). Two rules
-keep it as fast (`bench/diagnostics/generic_dim_kernel.py`, docs/developer.md):
+keep it as fast (docs/developer.md):
 
 * load a pair's components into scalars (`x2 = ... if dim == 3 else 0.0`) before the
   first store into `sums`: a store may alias any float64 array, so a load after it is

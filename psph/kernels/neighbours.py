@@ -50,8 +50,8 @@ def pair_cell_span(dim: int) -> int:
     """Cells of the pair sweep's grid across the 2h support: its cells have side 2h / span.
 
     2D: 1 (side 2h). 3D: 2 (side h): on a lattice at h = 1.2 dx a particle's half stencil
-    then visits 93 candidates instead of 157 for the same 26 pairs
-    (`bench/diagnostics/pair_grid_candidates.py`), and the 3D sweep takes 15 % less time.
+    then visits 93 candidates instead of 157 for the same 26 pairs, and the 3D sweep
+    takes 15 % less time.
     The other cell-list kernels (Shepard, the boundary particles, non-local softening)
     keep cells of side 2h.
 

@@ -2,8 +2,8 @@
 (`psph/kernels/nonlocal_strain.py`) with its cell lists built once, for one or more
 weight sets m (m = 1: the plain average eps_bar; the material's m: eps_hat).
 
-Used by the regularisation tests and by the benches that look into a band
-(`bench/diagnostics/nonlocal_wall_band.py`, `bench/diagnostics/nonlocal_particle.py`).
+Used by the regularisation tests and by the studies that look into a band
+(`bench/studies/nonlocal_wall_band.py`).
 """
 
 from collections.abc import Sequence
