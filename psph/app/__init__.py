@@ -1,2 +1,2 @@
 """The application: command line, the run driver (outputs, checkpoints, restarts, stop
-signals), the restart rule, progress, and experiment entry points that run scenes."""
+signals), the restart rule, the memory check and progress."""

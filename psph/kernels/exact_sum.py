@@ -48,7 +48,7 @@ def _grow(partials: np.ndarray, m: int, x: float) -> int:
 # 32-bit chunks of int64 accumulators (Neal 2015, "Fast exact summation using small and
 # large superaccumulators", arXiv:1505.05571): a term costs three integer additions
 # instead of a pass over the expansion, and 2^31 terms cannot overflow a chunk. The
-# chunks then become a few doubles, summed by `_grow` into an expansion as before.
+# chunks then become a few doubles, summed by `_grow` into the expansion.
 _CHUNKS = 67
 _MASK = (1 << 32) - 1
 # terms at or above 2^_BIG (and non-finite ones) take the expansion directly: the chunk
