@@ -11,9 +11,11 @@ pressure in this case)".
 
     python bench/verification/collapse_beta.py            # runs both on 2 ranks to 1.2 s (~5-7 min)
     python bench/verification/collapse_beta.py --plot-only
+    python bench/verification/collapse_beta.py --quick      # dx 0.16 m to 10 ms (a smoke check)
 
-Prints the suction table, writes bench/out/collapse_beta.json and
-bench/out/collapse_beta.png. A run that fails (exit 3) is drawn up to its last snapshot.
+Prints the suction table, writes <out>/collapse_beta.json and .png (`--out`, default
+bench/out; the runs go to <out>/collapse_beta_0 and _1). A run that fails (exit 3) is
+drawn up to its last snapshot.
 """
 
 import argparse
@@ -39,6 +41,7 @@ CASES = {"Eq. (47) on, beta = 0.04": 0.04, "Eq. (47) off, beta = 0": 0.0}
 # Fig. 15's frames, after one at the peak of the suction without Eq. (47)
 END, TIMES = 1.2, [0.15, 0.3, 0.6, 1.2]
 EVERY = 0.05  # s between the snapshots of the suction integral
+SETTINGS: list[str] = []  # further --set lines of both runs (--quick's dx)
 
 
 def run_case(beta: float, out: Path) -> int:
@@ -49,6 +52,7 @@ def run_case(beta: float, out: Path) -> int:
            "collapse_saturated_psi2.5", "--out", str(out), "--quiet",
            "--set", f"pressure.beta={beta}", "--set", f"time.end={END}",
            "--set", f"output.times={TIMES}", "--set", f"output.interval={EVERY}"]
+    cmd += [a for kv in SETTINGS for a in ("--set", kv)]
     return subprocess.run(cmd, env=env, cwd=ROOT).returncode
 
 
@@ -108,7 +112,7 @@ def print_table(report: dict) -> None:
 
 
 def main(run: bool = True) -> None:
-    OUT.mkdir(exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)
     report = {"date": str(date.today()), "cases": {}}
     if run:
         codes = {label: run_case(beta, OUT / f"collapse_beta_{i}")
@@ -181,11 +185,18 @@ def plot(report: dict) -> None:
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--plot-only", action="store_true", help="redraw from the JSON")
     ap.add_argument("--measure-only", action="store_true",
-                    help="measure the runs already in bench/out/collapse_beta_{0,1}")
+                    help="measure the runs already in <out>/collapse_beta_{0,1}")
+    ap.add_argument("--quick", action="store_true",
+                    help="both runs at dx = 0.16 m to 10 ms (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs, the JSON and the PNG (default bench/out)")
     args = ap.parse_args()
+    OUT = args.out
+    if args.quick:
+        END, TIMES, EVERY, SETTINGS = 0.01, [0.005, 0.01], 0.005, ["particles.dx=0.16"]
     if args.plot_only:
         plot(json.loads((OUT / "collapse_beta.json").read_text()))
     else:

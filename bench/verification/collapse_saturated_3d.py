@@ -1,4 +1,4 @@
-"""The plane-strain check of 3D (issue 37): the saturated column collapse of Section 4.4 as
+"""The plane-strain check of 3D: the saturated column collapse of Section 4.4 as
 a slab 4 dx thick between free-slip walls (`collapse_saturated_3d`) against the 2D scene
 at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
 
@@ -9,6 +9,7 @@ at the same dx (`collapse_saturated_psi<psi>`), for psi = -5, 0 and 2.5 degrees.
                                         # both at another dx (the slab stays 4 dx thick)
     python bench/verification/collapse_saturated_3d.py --psi -5 --alpha 1 --epsilon 0.5
                                         # the slab at the 2D scene's alpha and epsilon
+    python bench/verification/collapse_saturated_3d.py --quick    # psi = 0, dx 0.16, 10 ms
 
 The slab scene carries the 2D scene's artificial viscosity and artificial stress, not its
 numbers: at one alpha and epsilon both terms are weaker on a cubic lattice than on a
@@ -38,23 +39,22 @@ runs alike). Compared:
 the run-out at the end (`metrics.collapse.runout_m`, the toe's 99.8th percentile of x
 minus the initial front) and the largest 99th percentile of |excess p| over the snapshots
 (`metrics.pressure_quality.over_run.abs_excess_p99_max_Pa`; the slab's are read in its x-z
-plane, psph/verify/collapse.py `plane_strain_view`). The issue's bar: within 5 % of 2D.
-Prints a table, writes bench/out/collapse_saturated_3d.json and .png (run-out and p99
+plane, psph/verify/collapse.py `plane_strain_view`). The bar: within 5 % of 2D.
+Runs go to runs/collapse_saturated_3d/<name> (`--runs`). Prints a table, writes
+<out>/collapse_saturated_3d[<variant>].json and .png (run-out and p99
 of |excess| against time, 2D lines, 3D markers).
 """
 
 import argparse
 import json
 import platform
-import sys
 import tomllib
 from datetime import date
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "bench" / "tools"))
-from scene_runs import run_scene  # noqa: E402
+from scene_runs import run_scene
 
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "collapse_saturated_3d"
 PSIS = ("-5", "0", "2.5")
@@ -116,7 +116,17 @@ def main() -> None:
     ap.add_argument("--end", type=float, help="end time of both runs (scene: 1.2 s)")
     ap.add_argument("--alpha", type=float, help="the slab's artificial viscosity alpha")
     ap.add_argument("--epsilon", type=float, help="the slab's artificial stress epsilon")
+    ap.add_argument("--runs", type=Path, default=RUNS,
+                    help="directory of the runs (default runs/collapse_saturated_3d)")
+    ap.add_argument("--quick", action="store_true",
+                    help="psi = 0 at dx = 0.16 m to 0.01 s, runs under <out> (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON and PNG (default bench/out)")
     args = ap.parse_args()
+    if args.quick:
+        args.psi, args.dx, args.end = ["0"], 0.16, 0.01
+        if args.runs == RUNS:
+            args.runs = args.out / "collapse_saturated_3d-runs"
     common, tag = [], ""
     if args.dx is not None:
         thick = 4 * args.dx  # the slab 4 dx thick, as the scene
@@ -132,12 +142,12 @@ def main() -> None:
         f"_e{args.epsilon:g}" if args.epsilon is not None else "")
     rows = {}
     for psi in args.psi:
-        s2 = run(RUNS / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
+        s2 = run(args.runs / f"psi{psi}{tag}_2d", f"collapse_saturated_psi{psi}", 1, common,
                  args.reuse)
         stab = ([f"stabilisation.av_alpha={args.alpha:g}"] if args.alpha is not None else []) + (
             [f"stabilisation.artificial_stress={args.epsilon:g}"]
             if args.epsilon is not None else [])
-        s3 = run(RUNS / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
+        s3 = run(args.runs / f"psi{psi}{tag3}_3d", "collapse_saturated_3d", args.np,
                  plasticity_settings(psi) + common + slab + stab, args.reuse)
         r2, r3 = numbers(s2), numbers(s3)
         rows[psi] = {"2d": r2, "3d": r3,
@@ -152,14 +162,14 @@ def main() -> None:
               f"{100 * r['runout_rel']:+6.1f}% {r['2d']['abs_excess_p99_max_Pa'] / 1e3:15.2f} "
               f"{r['3d']['abs_excess_p99_max_Pa'] / 1e3:7.2f} "
               f"{100 * r['abs_excess_p99_rel']:+6.1f}% {'yes' if ok else 'NO':>10s}")
-    OUT.mkdir(parents=True, exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
     name = f"collapse_saturated_3d{tag3}"
-    (OUT / f"{name}.json").write_text(json.dumps(
+    (args.out / f"{name}.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.platform(), "dx": args.dx,
          "end": args.end, "alpha": args.alpha,
          "epsilon": args.epsilon, "rows": rows}, indent=1) + "\n")
-    plot(rows, OUT / f"{name}.png", tag3)
-    print(f"wrote {OUT / name}.json and .png")
+    plot(rows, args.out / f"{name}.png", tag3)
+    print(f"wrote {args.out / name}.json and .png")
 
 
 if __name__ == "__main__":

@@ -1,8 +1,9 @@
-"""The saturated-collapse table of the README (Section 4.4, Table 1) from finished runs.
+"""The saturated-collapse table (Section 4.4, Table 1) from finished runs.
 
     make scene-collapse_saturated_psi-5 scene-collapse_saturated_psi0 \
          scene-collapse_saturated_psi2.5
     python bench/verification/collapse_table.py            # reads runs/collapse_saturated_*
+    python bench/verification/collapse_table.py --quick    # psi = 0 at dx 0.16 m to 20 ms
 
 For each dilatancy angle: the run-out at 0.6 s and at the end, the largest and the most
 negative excess pore pressure over all snapshots and the highest 99th percentile of
@@ -11,13 +12,15 @@ current position, psph/verify/pressure.py), the median excess in the shear band
 (eps_p > 0.05) at the end, the checkerboard index of p' in the debris
 at the end, and the back scarp at the end; then the same pressures over the current
 phreatic line (`phreatic_excess`: drawdown through the drained face not read as negative
-excess) and the suction max(-p, 0). Writes bench/out/collapse_table.json.
+excess) and the suction max(-p, 0). Writes <out>/collapse_table.json.
 """
 
+import argparse
 import json
 from pathlib import Path
 
 import numpy as np
+from scene_runs import run_scene as start_run
 
 from psph.config.load import run_scene
 from psph.io.snapshots import read_snapshots
@@ -58,9 +61,21 @@ def case_row(run: Path) -> dict:
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--runs", type=Path, default=ROOT / "runs",
+                    help="directory holding the runs collapse_saturated_psi* (default runs)")
+    ap.add_argument("--quick", action="store_true",
+                    help="run psi = 0 at dx = 0.16 m to 20 ms into <out> first, and table it")
+    ap.add_argument("--out", type=Path, default=ROOT / "bench" / "out",
+                    help="directory of collapse_table.json (default bench/out)")
+    args = ap.parse_args()
+    if args.quick:
+        args.runs = args.out / "collapse_table-runs"
+        start_run(args.runs / CASES["0"], CASES["0"], 1,
+                  ["particles.dx=0.16", "time.end=0.02", "output.interval=0.01"], False)
     rows = {}
     for psi, name in CASES.items():
-        run = ROOT / "runs" / name
+        run = args.runs / name
         if (run / "particles.h5").is_file():
             rows[psi] = case_row(run)
     print(f"{'psi':>5s} {'run-out 0.6 s':>13s} {'run-out end':>11s} {'max excess kPa':>14s} "
@@ -78,9 +93,8 @@ def main() -> None:
     for psi, r in rows.items():
         print(f"{psi:>5s} {r['abs_phreatic_excess_p99_kPa']:12.1f} "
               f"{r['band_phreatic_excess_median_end_kPa']:11.1f} {r['suction_p99_kPa']:11.1f}")
-    out = ROOT / "bench" / "out"
-    out.mkdir(exist_ok=True)
-    (out / "collapse_table.json").write_text(json.dumps(rows, indent=1) + "\n")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "collapse_table.json").write_text(json.dumps(rows, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -1,15 +1,17 @@
-"""Cryer's sphere, the reference of the 3D scene `cryer` (issue 37), checked before any 3D
+"""Cryer's sphere, the reference of the 3D scene `cryer`, checked before any 3D
 run: the centre pressure of the analytical series (`psph/verify/cryer.py`, Verruijt
 Sect. 3.3) against the radial finite-volume solution of the same equations
 (`radial_centre_pressure`) at two grids, for three soils: the peak of the Mandel-Cryer
 rise, its time, and the largest difference over tau = c t / a^2 in [0.005, 1].
 
-    .venv/bin/python bench/verification/cryer_reference.py     # ~10 s
+    .venv/bin/python bench/verification/cryer_reference.py            # ~10 s
+    .venv/bin/python bench/verification/cryer_reference.py --quick    # the first soil
 
-Prints a table, writes bench/out/cryer_reference.json and .png (p / p0 at the centre
+Prints a table, writes <out>/cryer_reference.json and .png (p / p0 at the centre
 against tau, series and radial solution).
 """
 
+import argparse
 import json
 import platform
 from datetime import date
@@ -28,10 +30,16 @@ SOILS = {  # (nu, K_l): the paper's column's soil, a soil with nu = 0, a softer 
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="the first soil alone")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of cryer_reference.json and .png (default bench/out)")
+    args = ap.parse_args()
+    soils = dict(list(SOILS.items())[:1]) if args.quick else SOILS
     taus = np.round(np.concatenate([np.arange(0.005, 0.2, 0.005),
                                     np.arange(0.2, 1.0001, 0.02)]), 4)
     rows, curves = [], {}
-    for name, (nu, kl) in SOILS.items():
+    for name, (nu, kl) in soils.items():
         cryer = Cryer(radius=1.0, load=10.0e3, young=20.0e6, poisson=nu, porosity=0.4,
                       bulk_water=kl, conductivity=2.0e-4, gamma_l=9810.0)
         series = cryer.centre_pressure(taus / cryer.cv) / cryer.p0
@@ -52,8 +60,8 @@ def main() -> None:
         print(f"| {r['soil']} | {r['eta']:.3f} | {r['p0_over_q']:.4f} | "
               f"{r['peak_over_p0']:.4f} | {r['tau_peak']:.4f} | {r['max_diff_coarse']:.1e} | "
               f"{r['max_diff_fine']:.1e} |")
-    OUT.mkdir(exist_ok=True)
-    (OUT / "cryer_reference.json").write_text(json.dumps(
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "cryer_reference.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows},
         indent=1))
     import matplotlib
@@ -69,8 +77,8 @@ def main() -> None:
     ax.set_title("Cryer's sphere: the reference and its radial check")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(OUT / "cryer_reference.png", dpi=120)
-    print(f"wrote {OUT / 'cryer_reference.json'}, .png")
+    fig.savefig(args.out / "cryer_reference.png", dpi=120)
+    print(f"wrote {args.out / 'cryer_reference.json'}, .png")
 
 
 if __name__ == "__main__":

@@ -8,9 +8,11 @@ T_v = 0.2, where the largest error is); this is the whole run.
     mpirun -n 1 .venv/bin/python bench/verification/default_run.py \
         --set pressure.tolerance=1e-4 --set 'verification.tv=[0.05, 0.1, 0.2]'  # a variant
     mpirun -n 2 .venv/bin/python bench/verification/default_run.py --scene terzaghi_3d
-        # the same column in 3D between four slip walls (issue 37), ~15 min here
+        # the same column in 3D between four slip walls, ~15 min here
+    mpirun -n 2 .venv/bin/python bench/verification/default_run.py --quick
+        # the tests' column (dx = 0.02 m, k = 8e-4 m/s) to T_v = 0.05, seconds
 
-Prints a table, writes bench/out/default_run-np<P>[-<tag>].json and .png (error against
+Prints a table, writes <out>/default_run-np<P>[-<tag>].json and .png (error against
 T_v; `<scene>-np<P>` for another --scene); --set overrides a scene key as `psph run --set`
 does (the tag names the variant).
 """
@@ -37,7 +39,14 @@ def main() -> None:
     ap.add_argument("--tag", default="", help="suffix of the output files")
     ap.add_argument("--scene", default="terzaghi",
                     help="a Terzaghi column scene: terzaghi (default) or terzaghi_3d")
+    ap.add_argument("--quick", action="store_true",
+                    help="dx = 0.02 m, k = 8e-4 m/s, to T_v = 0.05 (a smoke check; tag quick)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON and PNG (default bench/out)")
     args = ap.parse_args()
+    if args.quick:
+        args.set += ["particles.dx=0.02", "material.k=8e-4", "verification.tv=[0.05]"]
+        args.tag = args.tag or "quick"
     comm = MPI.COMM_WORLD
     work = comm.bcast(tempfile.mkdtemp(prefix="psph-default-") if comm.rank == 0 else None)
     summary = run(load_scene(args.scene, args.set), Path(work) / args.scene, comm=comm,
@@ -63,9 +72,9 @@ def main() -> None:
         print(f"| {tv:g} | {e:.4f} |")
     print(f"settlement error {result['settlement_error']:.4f}; within 1 %: "
           f"{result['within_one_percent']}")
-    OUT.mkdir(exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
     name = "default_run" if args.scene == "terzaghi" else args.scene
-    stem = OUT / (f"{name}-np{comm.size}" + (f"-{args.tag}" if args.tag else ""))
+    stem = args.out / (f"{name}-np{comm.size}" + (f"-{args.tag}" if args.tag else ""))
     stem.with_suffix(".json").write_text(json.dumps(result, indent=1))
     import matplotlib
 

@@ -1,4 +1,4 @@
-"""Stability of the pressure projection against its stable step (issue 39).
+"""Stability of the pressure projection against its stable step.
 
 Each column runs with `pressure.scheme = "projection"` at dt = f x the step validation
 accepts for it, the solid cap Eq. (41), f from 0.25 to 2, after the kick ("symplectic",
@@ -19,10 +19,12 @@ tests' size) and "geotaichi" (`terzaghi_undrained`: GeoTaichi's start, dx = 0.02
     .venv/bin/python bench/verification/projection_stability.py --full --jobs 2  # hours
     .venv/bin/python bench/verification/projection_stability.py --only 'ci|geotaichi' --jobs 2
     .venv/bin/python bench/verification/projection_stability.py --plot-only   # the record
+    .venv/bin/python bench/verification/projection_stability.py --quick
+        # GeoTaichi's column after the kick at the stable step to T_v = 0.01
 
 Finished cases are appended to docs/data/projection_stability.jsonl (committed), so a
 stopped sweep resumes, on this machine or another, and the docs' table is built from every
-recorded row. Prints the table, writes bench/out/projection_stability.json, .png and .md
+recorded row. Prints the table, writes <out>/projection_stability.json, .png and .md
 (the docs' table).
 """
 
@@ -199,8 +201,19 @@ def main() -> None:
     ap.add_argument("--record", type=Path, default=RECORD,
                     help="the rows measured so far, one JSON line per case (default: the "
                          "docs' record, so that a sweep resumes on any machine)")
+    ap.add_argument("--quick", action="store_true",
+                    help="one case, GeoTaichi's column after the kick at f = 1 on 1 rank to "
+                         "T_v = 0.01, recorded in <out>/projection_stability-quick.jsonl "
+                         "(a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON, PNG and table (default bench/out)")
     args = ap.parse_args()
-    OUT.mkdir(exist_ok=True)
+    if args.quick:
+        args.only = "^geotaichi symplectic f=1 ranks=1$"
+        COMMON.append("verification.tv=[0.01]")
+        if args.record == RECORD:
+            args.record = args.out / "projection_stability-quick.jsonl"
+    args.out.mkdir(parents=True, exist_ok=True)
     done = {}
     if args.record.exists():
         for line in args.record.read_text().splitlines():
@@ -221,13 +234,13 @@ def main() -> None:
     rows = sorted(done.values(), key=lambda r: order.get(r["label"], len(order)))
     for r in rows:
         r["stable"] = stable(r)
-    (OUT / "projection_stability.json").write_text(json.dumps(
+    (args.out / "projection_stability.json").write_text(json.dumps(
         {"date": date.today().isoformat(), "machine": platform.node(), "rows": rows},
         indent=1))
     print(table(rows))
-    plot(rows, OUT / "projection_stability.png")
-    (OUT / "projection_stability.md").write_text(markdown(rows))
-    print(f"wrote {OUT}/projection_stability.json, .png, .md (every recorded row)")
+    plot(rows, args.out / "projection_stability.png")
+    (args.out / "projection_stability.md").write_text(markdown(rows))
+    print(f"wrote {args.out}/projection_stability.json, .png, .md (every recorded row)")
 
 
 if __name__ == "__main__":

@@ -3,11 +3,12 @@ same particles: every snapshot is compared field by field with the 1-rank run.
 
     python bench/verification/rank_invariance.py           # both scenes, ranks 1 2 3 4
     python bench/verification/rank_invariance.py --ranks 1 2 3
+    python bench/verification/rank_invariance.py --quick   # the column on 1 and 2 ranks
 
 Scenes: the consolidation column (coupled, explicit loading then TPI, Shepard filter and
 Eq. (47) on) and a dry block falling through every slab onto the floor (migration to
 ranks further away, load balancing recuts the slabs). Prints a table of the largest
-difference per field, writes bench/out/rank_invariance.json and .png (the column's final
+difference per field, writes <out>/rank_invariance.json and .png (the column's final
 pore pressure on each rank count, with that run's slab cuts).
 """
 
@@ -60,14 +61,22 @@ def max_differences(ref: Path, other: Path) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    global OUT
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 3, 4])
+    ap.add_argument("--quick", action="store_true",
+                    help="the column alone on 1 and 2 ranks (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs, the JSON and the PNG (default bench/out)")
     args = ap.parse_args()
-    OUT.mkdir(exist_ok=True)
+    OUT = args.out
+    OUT.mkdir(parents=True, exist_ok=True)
     work = OUT / "rank_invariance"
     work.mkdir(exist_ok=True)
     scenes = {"column": ("terzaghi_tpi", COLUMN),
               "falling_block": (str(FALLING_FAR), ["decomposition.rebalance_every=50"])}
+    if args.quick:
+        args.ranks, scenes = [1, 2], {"column": scenes["column"]}
     rows = []
     for label, (scene, sets) in scenes.items():
         for r in args.ranks:

@@ -1,8 +1,10 @@
 """Pore pressure through the retrogressive failure (Section 4.5, Fig. 20 and 24) from
-finished runs: the checks of issue 13.
+finished runs.
 
     python bench/verification/retrogressive_pressure.py bench/out/field_retrogressive_k0_0.5 \
         bench/out/field_retrogressive_k0_1.5
+    python bench/verification/retrogressive_pressure.py --quick
+        # retrogressive_k0_0.5 at dx = 2 m to 0.02 s (run into <out> first), checked
 
 For each run directory:
 
@@ -18,7 +20,7 @@ For each run directory:
   between slides with freshly sheared soil, whose excess is new, not undissipated):
   Fig. 20 shows it dissipating; with the same particles' median mean effective stress
   p' (compression positive) at the slide and later, whose rise is the consolidation of
-  Fig. 21 (negative: effective tension, README cause 13); and their median buoyant
+  Fig. 21 (negative: effective tension); and their median buoyant
   overburden gamma' (y_s - y) (y_s: the ground surface above, gamma' = (1 - n0)
   (rho_s - rho_l) |g|) with the median ratio r_u = excess / buoyant overburden: a
   liquefied soil at rest loaded without drainage keeps r_u = 1 while its excess grows
@@ -33,14 +35,16 @@ For each run directory:
   particle of the bottom row (y < 0.75 dx; its neighbours all sit higher, at less
   overburden, so its lead is positive without any spike).
 
-Prints a table and writes bench/out/retrogressive_pressure.json.
+Prints a table and writes <out>/retrogressive_pressure.json.
 """
 
+import argparse
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
+from scene_runs import run_scene as start_run
 
 from psph.config.load import run_scene
 from psph.io.snapshots import read_snapshots
@@ -190,8 +194,23 @@ def run_checks(out: Path) -> dict:
     return result
 
 
-def main(argv: list[str]) -> int:
-    rows = [run_checks(Path(a)) for a in argv]
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("runs", nargs="*", type=Path, help="finished runs' output directories")
+    ap.add_argument("--quick", action="store_true",
+                    help="run retrogressive_k0_0.5 at dx = 2 m to 0.02 s into <out> first, "
+                         "and check it (a smoke check)")
+    ap.add_argument("--out", type=Path, default=ROOT / "bench" / "out",
+                    help="directory of retrogressive_pressure.json (default bench/out)")
+    args = ap.parse_args(argv)
+    if args.quick:
+        run = args.out / "retrogressive_pressure-run"
+        start_run(run, "retrogressive_k0_0.5", 1,
+                  ["particles.dx=2.0", "time.end=0.02", "output.interval=0.01"], False)
+        args.runs.append(run)
+    if not args.runs:
+        ap.error("no run directory given (or --quick)")
+    rows = [run_checks(a) for a in args.runs]
     for r in rows:
         print(f"{r['run']}: t_end {r['t_end_s']:.1f} s, {r['slides']} slides at "
               f"{', '.join(f'{t:.0f}' for t in r['slide_times_s'])} s")
@@ -250,11 +269,10 @@ def main(argv: list[str]) -> int:
                   f"{f(b['same_particles']['buoyant_overburden_median_Pa']):>8s} "
                   f"{fmt_ru(a['same_particles']['ru_median']):>5s} "
                   f"{fmt_ru(b['same_particles']['ru_median']):>8s}")
-    out = ROOT / "bench" / "out"
-    out.mkdir(exist_ok=True)
-    (out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "retrogressive_pressure.json").write_text(json.dumps(rows, indent=1) + "\n")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main())

@@ -1,13 +1,14 @@
-"""`slope_3d` (issue 38): the 3D retrogressive slope, and its plane-strain check.
+"""`slope_3d`: the 3D retrogressive slope, and its plane-strain check.
 
     python bench/verification/slope_3d.py --check          # plane-strain check (~15 min)
     python bench/verification/slope_3d.py --full --end 10  # slope_3d's first 10 s (~45 min)
     python bench/verification/slope_3d.py --check --full --reuse   # tables finished runs
+    python bench/verification/slope_3d.py --quick          # the check's first 2 ms
 
 The plane-strain check: `slope_3d` with the toe cut over the whole width (the domain 5 dx
 wide between its two slip walls, the cut polygon spans it) against the 2D scene
 `retrogressive_k0_0.5` at the same dx (1 m) and dt (1e-3 s), both to `--check-end`
-(default 12 s). The issue's bar: the first two slides at the same time within one
+(default 12 s). The bar: the first two slides at the same time within one
 snapshot interval (1 s) and the run-out within 5 % (at the second slide's snapshot and at
 the end). The 2D run is on one rank, the 3D ones under `mpirun -n NP` (default 2).
 
@@ -15,8 +16,8 @@ The full run: `slope_3d` to `--end` s, its metrics at each slide (retrogression 
 centre line, the scarp's width across the valley), the debris' footprint and volume, and
 its wall time, with the pictures of `psph plot` copied beside the table.
 
-Runs go to runs/slope_3d/<name> (`--reuse` keeps a finished one). Prints the tables,
-writes bench/out/slope_3d.json and .png (back scarp and run-out against time: 2D line,
+Runs go to runs/slope_3d/<name> (`--runs`; `--reuse` keeps a finished one). Prints the
+tables, writes <out>/slope_3d.json and .png (back scarp and run-out against time: 2D line,
 3D markers; the full run's retrogression and scarp width).
 """
 
@@ -28,10 +29,9 @@ import sys
 from datetime import date
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "bench" / "tools"))
-from scene_runs import run_scene  # noqa: E402
+from scene_runs import run_scene
 
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "bench" / "out"
 RUNS = ROOT / "runs" / "slope_3d"
 DX, DT = 1.0, 1.0e-3
@@ -41,8 +41,8 @@ SLAB = [f"domain.max=[1000.0, {5 * DX}, 40.0]",
         "boundaries.front.symmetry=false"]
 
 
-def run(name: str, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
-    return run_scene(RUNS / name, scene, ranks, settings, reuse)
+def run(out: Path, scene: str, ranks: int, settings: list[str], reuse: bool) -> dict:
+    return run_scene(out, scene, ranks, settings, reuse)
 
 
 def slides(s: dict) -> dict:
@@ -59,10 +59,10 @@ def runout_at(r: dict, t: float) -> float:
     return r["series"]["runout_m"][k]
 
 
-def plane_strain_check(end: float, ranks: int, reuse: bool) -> dict:
-    s2 = run("plane_strain_2d", "retrogressive_k0_0.5", 1,
+def plane_strain_check(end: float, ranks: int, reuse: bool, runs: Path = RUNS) -> dict:
+    s2 = run(runs / "plane_strain_2d", "retrogressive_k0_0.5", 1,
              [f"particles.dx={DX}", f"time.dt={DT}", f"time.end={end}"], reuse)
-    s3 = run("plane_strain_3d", "slope_3d", ranks, SLAB + [f"time.end={end}"], reuse)
+    s3 = run(runs / "plane_strain_3d", "slope_3d", ranks, SLAB + [f"time.end={end}"], reuse)
     r2, r3 = slides(s2), slides(s3)
     interval = 1.0  # both scenes' output.interval
     rows = []
@@ -94,11 +94,11 @@ def plane_strain_check(end: float, ranks: int, reuse: bool) -> dict:
     return {"end_s": end, "2d": r2, "3d": r3, "slides": rows, "runout": checks, "met": met}
 
 
-def full_run(end: float, ranks: int, reuse: bool) -> dict:
-    s = run(f"full_{end:g}s", "slope_3d", ranks, [f"time.end={end}"], reuse)
+def full_run(end: float, ranks: int, reuse: bool, runs: Path = RUNS) -> dict:
+    out = runs / f"full_{end:g}s"
+    s = run(out, "slope_3d", ranks, [f"time.end={end}"], reuse)
     m = s["metrics"]
     plan, col = m["slope_3d"], m["collapse"]
-    out = RUNS / f"full_{end:g}s"
     subprocess.run([sys.executable, "-m", "psph", "plot", str(out)], cwd=ROOT, check=True,
                    capture_output=True)
     print(f"\nslope_3d to {end:g} s: {s['particles']} particles on {s['ranks']} ranks, "
@@ -159,18 +159,29 @@ def main() -> None:
     ap.add_argument("--end", type=float, default=10.0, help="the full run's end (s)")
     ap.add_argument("--np", type=int, default=2, help="ranks of the 3D runs")
     ap.add_argument("--reuse", action="store_true", help="keep finished runs")
+    ap.add_argument("--runs", type=Path, default=RUNS,
+                    help="directory of the runs (default runs/slope_3d)")
+    ap.add_argument("--quick", action="store_true",
+                    help="the plane-strain check's first 2 ms, runs under <out> (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of slope_3d.json and .png (default bench/out)")
     args = ap.parse_args()
+    if args.quick:
+        args.check, args.check_end = True, 2.0e-3
+        if args.runs == RUNS:
+            args.runs = args.out / "slope_3d-runs"
     if not (args.check or args.full):
         ap.error("give --check, --full or both")
     result = {"date": date.today().isoformat(), "machine": platform.platform()}
     if args.check:
-        result["plane_strain"] = plane_strain_check(args.check_end, args.np, args.reuse)
+        result["plane_strain"] = plane_strain_check(args.check_end, args.np, args.reuse,
+                                                    args.runs)
     if args.full:
-        result["full"] = full_run(args.end, args.np, args.reuse)
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "slope_3d.json").write_text(json.dumps(result, indent=1) + "\n")
-    plot(result, OUT / "slope_3d.png")
-    print(f"wrote {OUT / 'slope_3d.json'} and .png")
+        result["full"] = full_run(args.end, args.np, args.reuse, args.runs)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "slope_3d.json").write_text(json.dumps(result, indent=1) + "\n")
+    plot(result, args.out / "slope_3d.png")
+    print(f"wrote {args.out / 'slope_3d.json'} and .png")
 
 
 if __name__ == "__main__":

@@ -1,17 +1,21 @@
-"""Run-out and back scarp against time of finished slope runs, side by side (issue 17):
+"""Run-out and back scarp against time of finished slope runs, side by side:
 `metrics.collapse.series` and the slides of each run's `summary.json`.
 
     python bench/verification/slope_series.py OUT1 OUT2 ... [--every 5] [--png PATH]
+    python bench/verification/slope_series.py --quick
+        # retrogressive_k0_0.5 at dx = 2 m to 0.02 s (run into <out> first), tabled
 
 Prints the table (the snapshot times every `--every` seconds that all runs reached, and
 each run's slide times), draws run-out and back scarp against time (default
-bench/out/slope_series.png) and writes the table beside the PNG (.json).
+<out>/slope_series.png) and writes the table beside the PNG (.json).
 """
 
 import argparse
 import json
 import sys
 from pathlib import Path
+
+from scene_runs import run_scene as start_run
 
 
 def load(out: Path) -> dict:
@@ -23,11 +27,24 @@ def load(out: Path) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("runs", nargs="+", type=Path)
+    ap.add_argument("runs", nargs="*", type=Path, help="finished runs' output directories")
     ap.add_argument("--every", type=float, default=5.0, help="table rows every ... s")
-    ap.add_argument("--png", type=Path, default=Path(__file__).resolve().parents[1] / "out" /
-                    "slope_series.png")
+    ap.add_argument("--quick", action="store_true",
+                    help="run retrogressive_k0_0.5 at dx = 2 m to 0.02 s into <out> first, "
+                         "and table it every 0.01 s (a smoke check)")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "out",
+                    help="directory of slope_series.png and .json (default bench/out)")
+    ap.add_argument("--png", type=Path, help="the picture's path (default <out>/slope_series.png)")
     args = ap.parse_args(argv)
+    args.png = args.png or args.out / "slope_series.png"
+    if args.quick:
+        run = args.out / "slope_series-run"
+        start_run(run, "retrogressive_k0_0.5", 1,
+                  ["particles.dx=2.0", "time.end=0.02", "output.interval=0.01"], False)
+        args.runs.append(run)
+        args.every = 0.01
+    if not args.runs:
+        ap.error("no run directory given (or --quick)")
     runs = [load(r) for r in args.runs]
     end = min(r["end"] for r in runs)
     print("t (s)  " + "  ".join(f"{r['name'][-28:]:>28}" for r in runs))
