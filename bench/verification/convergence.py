@@ -1,4 +1,4 @@
-"""Convergence of the landslide answers (issue 17, item 3): run-out and the other collapse
+"""Convergence of the landslide answers: run-out and the other collapse
 metrics against the particle spacing dx and the time step, with the local softening law
 of Eq. (17)-(19) and with its non-local regularisation (`material.plasticity.
 regularisation`, psph/physics/softening.py), and their error against wall time.
@@ -33,6 +33,7 @@ error is its distance to the reference of its scene, scheme and law: the dx-extr
 run-out at the smallest dt fraction that has one, else the finest run.
 
     python bench/verification/convergence.py --quick      # CI-sized (a 1 x 0.5 m dry column)
+    python bench/verification/convergence.py --smoke      # its coarsest local case to 0.05 s
     python bench/verification/convergence.py              # the full matrix (hours on 2 cores)
     python bench/verification/convergence.py --only 'psi0 tpi .* dt=1'   # a subset (regex)
     python bench/verification/convergence.py --only 'k0_0.5'   # the slope pairs
@@ -42,11 +43,11 @@ run-out at the smallest dt fraction that has one, else the finest run.
         # a case from a finished run of the case's scene (scene.toml value for value but
         # description, checkpoint and output; other snapshot times: last-snapshot metrics)
 
-Prints a table, writes bench/out/convergence[-quick].json (one entry per case, kept
+Prints a table, writes <out>/convergence[-quick|-smoke].json (one entry per case, kept
 between runs: a case already measured is not run again unless --rerun) and draws
-bench/out/convergence[-quick].png (run-out error against wall time, and run-out
-against dx) and, with slope cases, bench/out/convergence-slope.png (their last
-snapshots).
+<out>/convergence[-quick|-smoke].png (run-out error against wall time, and run-out
+against dx) and, with slope cases, <out>/convergence-slope.png (their last snapshots);
+the runs go to <out>/convergence[-quick|-smoke]/.
 """
 
 import argparse
@@ -76,8 +77,8 @@ L_C = 0.06
 SLOPE_L_C = 1.2
 SLOPE_DX = (0.4, 0.4 * math.sqrt(2.0))
 # the slope's laws: besides the default over-non-local average (m = 2), the plain one
-# (m = 1), which softens a band on the fixed base alike at both spacings (README, "The
-# cause of the pair's disagreement"; bench/diagnostics/nonlocal_sliding.py)
+# (m = 1), which softens a band on the fixed base alike at both spacings (docs/vv/
+# convergence.md; bench/studies/nonlocal_sliding.py)
 SLOPE_LAWS = ("local", "regularised", "regularised-m1")
 
 
@@ -104,7 +105,7 @@ SNAPSHOT_METRICS = ("slides", "slide_times_s", "excess_p_peak_Pa")
 
 
 def slug(label: str) -> str:
-    """A case's directory name under bench/out/convergence[-quick]/."""
+    """A case's directory name under <out>/convergence[-quick|-smoke]/."""
     return re.sub(r"[^A-Za-z0-9.=-]+", "_", label)
 
 
@@ -402,16 +403,26 @@ def plot_slopes(report: list[dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    global OUT, QUICK_DX
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the CI-sized dry column")
+    ap.add_argument("--smoke", action="store_true",
+                    help="the CI-sized column's coarsest local case to 0.05 s (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs, the JSON and the PNG (default bench/out)")
     ap.add_argument("--only", help="run only the cases whose label matches this regex")
     ap.add_argument("--rerun", action="store_true", help="run cases already in the JSON")
     ap.add_argument("--table-only", action="store_true", help="no runs: table and PNG")
     ap.add_argument("--adopt", action="append", nargs=2, default=[], metavar=("LABEL", "DIR"),
                     help="take a case from a finished run of the same scene and overrides")
     args = ap.parse_args(argv)
+    OUT = args.out
     OUT.mkdir(parents=True, exist_ok=True)
     name = "convergence-quick" if args.quick else "convergence"
+    if args.smoke:
+        args.quick, name, QUICK_DX = True, "convergence-smoke", QUICK_DX[:1]
+        QUICK_SETS[QUICK_SETS.index("time.end=0.5")] = "time.end=0.05"
+        args.only = args.only or " local "
     path = OUT / f"{name}.json"
     old = json.loads(path.read_text())["cases"] if path.is_file() else []
     by_label = {e["label"]: e for e in old}

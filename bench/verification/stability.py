@@ -14,8 +14,9 @@ Long run: the same column with the `terzaghi` settings (alpha = 0.5, dt = 5e-6 s
     python bench/verification/stability.py          # ~10 min on this machine
     python bench/verification/stability.py --plot-only
     python bench/verification/stability.py --projection   # the R row with the projection
+    python bench/verification/stability.py --quick        # R = 100, alpha = 0.7, 500 steps
 
-Writes bench/out/stability.json and bench/out/stability.png.
+Writes <out>/stability.json and .png.
 """
 
 import argparse
@@ -58,7 +59,7 @@ def _run(overrides: list[str]) -> tuple[dict | None, dict, str | None]:
     return summary, {k: rows[:, i] for i, k in enumerate(keys)}, None
 
 
-# the pressure projection instead of TPI (issue 14): one solve per step, the loading too
+# the pressure projection instead of TPI: one solve per step, the loading too
 PROJECTION = ["pressure.scheme='projection'", "time.integrator='symplectic'",
               "pressure.explicit_until=0.0"]
 
@@ -167,12 +168,21 @@ def projection_map() -> None:
 
 
 def main() -> None:
+    global OUT, N_TPI, R_VALUES, ALPHAS
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--projection", action="store_true",
                     help="the map's R row with the pressure projection (no alpha, no long "
                          "run); writes stability-projection.json")
+    ap.add_argument("--quick", action="store_true",
+                    help="one map case, R = 100 and alpha = 0.7, 500 TPI steps, no long run "
+                         "(a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON and PNG (default bench/out)")
     args = ap.parse_args()
+    OUT = args.out
+    if args.quick:
+        N_TPI, R_VALUES, ALPHAS = 500, (100,), (0.7,)
     OUT.mkdir(parents=True, exist_ok=True)
     if args.projection:
         projection_map()
@@ -189,7 +199,7 @@ def main() -> None:
             rows.append(r)
             verdict = "stable" if r["stable"] else f"UNSTABLE ({r['reason']})"
             print(f"{R:5.0f} {alpha:5.2f}  {verdict}", flush=True)
-    lr = long_run()
+    lr = {"stable": False, "detail": "not run (--quick)"} if args.quick else long_run()
     if lr["stable"]:
         print(f"long column to T_v = 10: {lr['steps']} steps, p_max after T_v = 1: "
               f"{lr['p_max_after_tv1']:.1f} Pa (p0 = {lr['p0']:.0f}), KE max after T_v = 1: "

@@ -1,5 +1,5 @@
 """Run time against error on Terzaghi (Section 4.1): explicit Eq. (25), TPI Eq. (38) and
-the pressure projection (one CG solve of Eq. 29 per step, issue 14).
+the pressure projection (one CG solve of Eq. 29 per step).
 
 Every case is the `terzaghi` scene on one rank, run to T_v = 0.5. Time is the run's
 CPU time (`time.process_time`, one rank, one thread): equal to its wall time on an idle
@@ -15,18 +15,20 @@ settlement error / final settlement over T_v in [0.1, 0.5].
     python bench/verification/time_vs_error.py --jobs 2   # the same on two cores (~55 min)
     python bench/verification/time_vs_error.py --quick    # dx = 0.02, k = 8e-4 column (~3 min)
     python bench/verification/time_vs_error.py --geotaichi  # GeoTaichi's start (~5 min)
+    python bench/verification/time_vs_error.py --smoke    # the --quick column to T_v = 0.02,
+                                                          # explicit and one TPI case
     python bench/verification/time_vs_error.py --jobs 2 \
         --only 'explicit|alpha=0.7|projection dt=1.2'
         # a subset in one run (labels matching the regular expression; writes *-only.*)
 
 `--geotaichi`: the `terzaghi_undrained` scene (H = 1 m, q = 10 kPa, k = 2e-4, dx = 0.02 m,
 2 particles wide: 100 particles; from the undrained state with the top drained from t = 0,
-as GeoTaichi's two-phase MPM starts it) against GeoTaichi's best measured here
-(../shared/anchors/geotaichi/results_table.txt: 400 particles, 0.97 % of q over T_v = 0.1,
-0.2, 0.5 in 37.6 CPU s of its time loop, one thread, float64).
+as GeoTaichi's two-phase MPM starts it) against GeoTaichi's best run measured on this
+machine (its run n50_f1.5_cold: 400 particles, 0.97 % of q over T_v = 0.1, 0.2, 0.5 in
+37.6 CPU s of its time loop, one thread, float64).
 
-Prints a table, writes bench/out/time_vs_error[-quick].json and draws
-bench/out/time_vs_error[-quick].png (error against wall time, the Pareto picture).
+Prints a table, writes <out>/time_vs_error[-quick|-geotaichi|-smoke][-only].json and
+draws the .png beside it (error against wall time, the Pareto picture).
 """
 
 import argparse
@@ -43,7 +45,7 @@ QUICK = ["particles.dx=0.02", "material.k=8e-4"]
 BAR = 0.03  # error bar of the headline: TPI speed-up at <= 3 % error
 FINE = 0.01  # the second headline: the fastest setting at <= 1 %
 GEOTAICHI = {"particles": 400, "p_error": 0.0097, "cpu_s": 37.6,
-             "source": "../shared/anchors/geotaichi/results_table.txt, n50_f1.5_cold"}
+             "source": "GeoTaichi's run n50_f1.5_cold, measured on this machine"}
 
 
 def cases(base: list[str]) -> list[tuple[str, list[str]]]:
@@ -248,11 +250,20 @@ def main() -> None:
     ap.add_argument("--only", metavar="REGEX",
                     help="run only the cases whose label matches (re.search), e.g. "
                          "'explicit|projection dt=1.2'; the table says which were run")
+    ap.add_argument("--smoke", action="store_true",
+                    help="the --quick column to T_v = 0.02, explicit and TPI at dt = 1e-5, "
+                         "alpha = 0.7 (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON and PNG (default bench/out)")
     args = ap.parse_args()
-    tag = ("-quick" if args.quick else "-geotaichi" if args.geotaichi else "") \
-        + ("-only" if args.only else "")
-    OUT.mkdir(parents=True, exist_ok=True)
-    jpath, ppath = OUT / f"time_vs_error{tag}.json", OUT / f"time_vs_error{tag}.png"
+    tag = ("-quick" if args.quick else "-geotaichi" if args.geotaichi else
+           "-smoke" if args.smoke else "") + ("-only" if args.only else "")
+    if args.smoke:
+        args.quick, args.geotaichi = True, False
+        args.only = args.only or "^explicit$|^tpi dt=1e-05 alpha=0.7$"
+        BASE[0] = "verification.tv=[0.02]"
+    args.out.mkdir(parents=True, exist_ok=True)
+    jpath, ppath = args.out / f"time_vs_error{tag}.json", args.out / f"time_vs_error{tag}.png"
     if args.plot_only:
         plot(json.loads(jpath.read_text()), ppath)
         return

@@ -8,9 +8,10 @@ rho k / gamma_l (measured, not derived; every dt here is below the solid limit E
 of the column, 6.9e-5 s). A run is stable if it reaches `--end` (default 0.3 s) without a
 numerical failure.
 
-    python bench/verification/tpi_gravity.py            # table, bench/out/tpi_gravity.json and .png
+    python bench/verification/tpi_gravity.py            # table, <out>/tpi_gravity.json and .png
     python bench/verification/tpi_gravity.py --plot-only
     python bench/verification/tpi_gravity.py --no-gravity   # the loaded Terzaghi column instead
+    python bench/verification/tpi_gravity.py --quick        # one cell of the map, to 5 ms
 
 `--projection`: the same geostatic column with `pressure.scheme = "projection"` (the
 symplectic step) at every dt of the map (k = 2e-4, G = 0.2 ... 1.2) and at the solid
@@ -82,7 +83,7 @@ def main(end: float, k: float) -> None:
             print(f"alpha {alpha:.1f}  G {g:.2f}  dt {dt:.2e}  "
                   f"{'stable' if ok else f'failed at step {step}'}", flush=True)
     report = {"date": str(date.today()), "end_s": end, "rows": rows}
-    OUT.mkdir(exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "tpi_gravity.json").write_text(json.dumps(report, indent=2) + "\n")
     table(report)
     plot(report)
@@ -99,7 +100,7 @@ def main_no_gravity(end: float) -> None:
             print(f"alpha {alpha:.1f}  G {g:.2f}  k {k:.3g}  "
                   f"{'stable' if ok else f'failed at step {step}'}", flush=True)
     report = {"date": str(date.today()), "end_s": end, "rows": rows, "gravity": False}
-    OUT.mkdir(exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "tpi_nogravity.json").write_text(json.dumps(report, indent=2) + "\n")
     table(report)
     plot(report)
@@ -136,7 +137,7 @@ def main_projection(steps: int) -> None:
         print(f"G {g:.2f}  dt {dt:.3e}  {summary.get('steps')} steps  "
               f"max |v| {vmax:.2e} m/s  {'at rest' if ok else 'FAILED'}", flush=True)
     report = {"date": str(date.today()), "steps": steps, "v_rest": V_REST, "rows": rows}
-    OUT.mkdir(exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "projection_gravity.json").write_text(json.dumps(report, indent=2) + "\n")
     print(f"projection, geostatic column, {steps} steps: "
           f"{sum(r['stable'] for r in rows)} of {len(rows)} at rest "
@@ -188,14 +189,21 @@ def plot(report: dict) -> None:
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--end", type=float, default=0.3)
     ap.add_argument("--k", type=float, default=2e-4)
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--no-gravity", action="store_true")
     ap.add_argument("--projection", action="store_true")
     ap.add_argument("--steps", type=int, default=100_000)
+    ap.add_argument("--quick", action="store_true",
+                    help="one cell of the map, alpha = 0.5 and G = 0.3, to 5 ms (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs, the JSON and the PNG (default bench/out)")
     a = ap.parse_args()
+    OUT = a.out
+    if a.quick:
+        ALPHAS, GAINS, a.end = (0.5,), (0.3,), 0.005
     if a.projection:
         main_projection(a.steps)
     elif a.plot_only:
