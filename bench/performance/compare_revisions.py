@@ -4,10 +4,12 @@ Each revision is checked out into a temporary git worktree and its own throughpu
 there on 1 and 2 ranks, alternating before / after `--repeats` times so that a change of
 machine load hits both alike; the best run of each case counts. Prints a table with the
 ratio after / before of each case's particle-steps per second, writes
-bench/out/compare_revisions.json and .png. Issue 36 asked for the kernel bundles and named
-columns to cost no more than 3 %:
+<out>/compare_revisions.json and .png (`--out`, default bench/out). A change that should
+cost no more than 3 %, e.g.:
 
     .venv/bin/python bench/performance/compare_revisions.py --before b5cd252 --after HEAD
+    .venv/bin/python bench/performance/compare_revisions.py --before HEAD --quick
+        # throughput.py --quick in both, 1 rank, once (revisions that have --quick)
 """
 
 import argparse
@@ -33,14 +35,14 @@ def checkout(rev: str, where: Path) -> str:
                           capture_output=True, text=True).stdout.strip()
 
 
-def throughput(tree: Path, ranks: int) -> list[dict]:
+def throughput(tree: Path, ranks: int, quick: bool = False) -> list[dict]:
     """One run of the tree's own bench/performance/throughput.py on `ranks` ranks."""
     env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_NUM_THREADS="1")
     subprocess.run(["mpirun", "-n", str(ranks), sys.executable,
-                    "bench/performance/throughput.py"], cwd=tree, env=env, check=True,
-                   capture_output=True)
-    return json.loads((tree / "bench" / "out" / f"throughput-{ranks}rank.json")
-                      .read_text())["rows"]
+                    "bench/performance/throughput.py"] + (["--quick"] if quick else []),
+                   cwd=tree, env=env, check=True, capture_output=True)
+    name = f"throughput-{'quick-' if quick else ''}{ranks}rank.json"
+    return json.loads((tree / "bench" / "out" / name).read_text())["rows"]
 
 
 def main() -> None:
@@ -49,18 +51,24 @@ def main() -> None:
     ap.add_argument("--after", default="HEAD", help="git revision (default HEAD)")
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--quick", action="store_true",
+                    help="throughput.py --quick, 1 rank, one repeat (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON and PNG (default bench/out)")
     args = ap.parse_args()
+    if args.quick:
+        args.ranks, args.repeats = [1], 1
     tmp = Path(tempfile.mkdtemp(prefix="psph-compare-"))
     trees = {"before": tmp / "before", "after": tmp / "after"}
     commits = {k: checkout(getattr(args, k), p) for k, p in trees.items()}
     try:
         for tree in trees.values():  # compile each tree's kernels once, untimed
-            throughput(tree, 1)
+            throughput(tree, 1, args.quick)
         best: dict = {}
         for rep in range(args.repeats):
             for ranks in args.ranks:
                 for name, tree in trees.items():
-                    for row in throughput(tree, ranks):
+                    for row in throughput(tree, ranks, args.quick):
                         key = (ranks, row["case"], name)
                         rate = row["particle_steps_per_s_per_core"]
                         best[key] = max(best.get(key, 0.0), rate)
@@ -86,12 +94,12 @@ def main() -> None:
         print(f"{r['ranks']:5d} {r['case']:58s} {r['before']:12,.0f} {r['after']:12,.0f} "
               f"{r['ratio']:12.3f}")
     print("(particle-steps / s / core, best of the repeats)")
-    OUT.mkdir(exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
     meta = {"date": str(date.today()), "machine": platform.node(), "commits": commits,
             "repeats": args.repeats, "rows": rows}
-    (OUT / "compare_revisions.json").write_text(json.dumps(meta, indent=2) + "\n")
-    plot(rows, commits, OUT / "compare_revisions.png")
-    print(f"wrote {OUT / 'compare_revisions.json'} and .png")
+    (args.out / "compare_revisions.json").write_text(json.dumps(meta, indent=2) + "\n")
+    plot(rows, commits, args.out / "compare_revisions.png")
+    print(f"wrote {args.out / 'compare_revisions.json'} and .png")
 
 
 def plot(rows: list[dict], commits: dict, path: Path) -> None:

@@ -5,14 +5,15 @@
     python bench/performance/field.py --scene retrogressive_k0_1.5
     python bench/performance/field.py --scene slope_section --window 0.5  # the section's throughput
     python bench/performance/field.py --plot-only
+    python bench/performance/field.py --quick        # dx = 2 m, a 0.02 s window (a smoke check)
 
 Prints a table (wall time, steps, particle-steps per second per core for the
 elastoplastic coupled step over the whole run and over its time steps alone ("stepping":
 the stages' seconds, without set-up, gravity loading, snapshots and end-of-run metrics),
 the wall time the full 40 s take at that rate, and the time share of each stage) and
-writes bench/out/field.json (one entry per scene and window) and bench/out/field.png.
-The bar of issue 5: the full 40 s of retrogressive_k0_0.5 in under 30 minutes of wall
-time on 2 ranks.
+writes <out>/field.json (one entry per scene and window; `--out`, default bench/out) and
+<out>/field.png, the runs under <out>/field_<scene>[_window]. The bar: the full 40 s of
+retrogressive_k0_0.5 in under 30 minutes of wall time on 2 ranks.
 """
 
 import argparse
@@ -33,6 +34,9 @@ BAR_S = 1800.0
 PAPER_RUNOUT_M = {"retrogressive_k0_0.5": 192.0, "retrogressive_k0_1.5": 186.0}
 
 
+SETTINGS: list[str] = []  # further --set lines of the run (--quick's dx)
+
+
 def run_case(scene: str, end: float | None, out: Path) -> tuple[int, str]:
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
@@ -41,6 +45,7 @@ def run_case(scene: str, end: float | None, out: Path) -> tuple[int, str]:
            "--quiet"]
     if end is not None:
         cmd += ["--set", f"time.end={end}"]
+    cmd += [a for kv in SETTINGS for a in ("--set", kv)]
     proc = subprocess.run(cmd, env=env, cwd=ROOT, stderr=subprocess.PIPE, text=True)
     sys.stderr.write(proc.stderr)
     return proc.returncode, proc.stderr
@@ -145,12 +150,21 @@ def plot(report: dict) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    global OUT
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", default="retrogressive_k0_0.5")
     ap.add_argument("--window", type=float, default=None, help="end time (s); default 40")
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--quick", action="store_true",
+                    help="the scene at dx = 2 m, a 0.02 s window (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs, the JSON and the PNG (default bench/out)")
     args = ap.parse_args()
-    OUT.mkdir(exist_ok=True)
+    OUT = args.out
+    if args.quick:
+        args.window = 0.02
+        SETTINGS.append("particles.dx=2.0")
+    OUT.mkdir(parents=True, exist_ok=True)
     path = OUT / "field.json"
     report = json.loads(path.read_text()) if path.is_file() else {"entries": {}}
     if not args.plot_only:

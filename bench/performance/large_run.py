@@ -1,4 +1,4 @@
-"""About ten million particles on this machine (issue 15, item 4): the dry collapse at
+"""About ten million particles on this machine: the dry collapse at
 dx = 0.0009 m (9.9M particles) on 2 ranks sets up, runs 100 steps, writes a snapshot and a
 checkpoint, and restarts from it for 100 more; then the same scene's set-up (one step, no
 checkpoint) on 1, 2 and 4 ranks (4 oversubscribed on 2 cores) shows the peak memory per
@@ -10,12 +10,13 @@ rank against the rank count.
     python bench/performance/large_run.py --scene collapse_3d --dx 0.0058   # 2.0M in 3D
     python bench/performance/large_run.py --scene collapse_3d --dx 0.0034 --steps 2
         # 10M in 3D: the same protocol with 2 steps a run (100 take hours here)
+    python bench/performance/large_run.py --quick         # dx 0.04, 2 steps (a smoke check)
 
 Each case is one `mpirun -n R python -m psph run collapse_dry`; its summary.json gives the
 set-up seconds, the seconds per step of the time loop (the snapshot and checkpoint writes
 are in the loop: `stage_seconds` splits them out), the peak resident memory of every rank
-(getrusage) and particle-steps/s/core. Prints a table, writes bench/out/large_run.json and
-bench/out/large_run.png; the run directories (GBs) are removed.
+(getrusage) and particle-steps/s/core. Prints a table, writes <out>/large_run[...].json and
+.png; the run directories (GBs) are removed.
 """
 
 import argparse
@@ -167,11 +168,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--setup-only", action="store_true",
                     help="only the set-up and one step on 1, 2 and 4 ranks (the memory and "
                     "set-up rows; a scene too large to run 200 steps here)")
+    ap.add_argument("--quick", action="store_true",
+                    help="dx = 0.04 m and 2 steps a run (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs (removed after), the JSON and the PNG "
+                         "(default bench/out)")
     args = ap.parse_args(argv)
-    global SCENE, STEPS
+    global SCENE, STEPS, OUT
+    if args.quick:
+        args.dx, args.steps = 0.04, 2
     SCENE = args.scene
     STEPS = args.steps
-    OUT.mkdir(exist_ok=True)
+    OUT = args.out
+    OUT.mkdir(parents=True, exist_ok=True)
     stem = "large_run" if SCENE == "collapse_dry" else f"large_run_{SCENE}"
     if args.setup_only:
         stem += "_setup"

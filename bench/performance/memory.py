@@ -1,5 +1,5 @@
-"""Peak memory and set-up time per rank against the particle count and the rank count
-(issue 15): the dry collapse at several dx, one step, one snapshot and one checkpoint, on
+"""Peak memory and set-up time per rank against the particle count and the rank count:
+the dry collapse at several dx, one step, one snapshot and one checkpoint, on
 1, 2 and 4 ranks (4 oversubscribed on a 2-core machine).
 
     python bench/performance/memory.py            # dx 0.004, 0.0028, 0.002 (0.5M, 1M, 2M particles)
@@ -12,8 +12,7 @@ Each case is one `mpirun -n R python -m psph run collapse_dry --set particles.dx
 (`memory.peak_rss_bytes_per_rank`, getrusage), the running state's bytes per owned
 particle and the set-up seconds. The ratio column is the largest rank's peak over the
 1-rank peak at the same dx: 1/R would be perfect division, 1 no division at all. Prints a
-table, writes bench/out/memory.json and bench/out/memory.png; the run directories are
-removed.
+table, writes <out>/memory[-quick].json and .png; the run directories are removed.
 """
 
 import argparse
@@ -94,12 +93,18 @@ def plot(rows: list[dict], name: str = "memory") -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--quick", action="store_true",
+                    help="dx 0.01 and 0.007 m on 1 and 2 ranks (a minute)")
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--dx", type=float, nargs="+", help="particle spacings instead of the "
                     "full set (on 1, 2 and 4 ranks)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the runs (removed after), the JSON and the PNG "
+                         "(default bench/out)")
     args = ap.parse_args(argv)
-    OUT.mkdir(exist_ok=True)
+    global OUT
+    OUT = args.out
+    OUT.mkdir(parents=True, exist_ok=True)
     path = OUT / ("memory-quick.json" if args.quick else
                   f"memory-dx{'_'.join(map(str, args.dx))}.json" if args.dx else "memory.json")
     if args.plot_only:

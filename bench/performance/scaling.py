@@ -2,14 +2,14 @@
 of the coupled elastic TPI step (the throughput bench's block, slabs along its long side).
 
     python bench/performance/scaling.py            # drives `mpirun -n R python <this> --worker`
-    python bench/performance/scaling.py --quick    # fewer steps, for a smoke check
+    python bench/performance/scaling.py --quick    # 2k and 4k particles, few steps (a smoke check)
     python bench/performance/scaling.py --plot-only
 
 Each worker times `steps` bare steps (after warm-up) three times and keeps the fastest
 window, with a barrier around each window; per-stage seconds come from the pipeline's own
 timers. Parallel efficiency E = T(1 rank) / (2 T(2 ranks)) for the same N (strong) and
-T(1 rank, N) / T(2 ranks, 2N) (weak). Prints a table, writes bench/out/scaling.json and
-bench/out/scaling.png.
+T(1 rank, N) / T(2 ranks, 2N) (weak). Prints a table, writes <out>/scaling.json and
+.png.
 """
 
 import argparse
@@ -27,10 +27,11 @@ from throughput import BLOCK  # (the same scene as the throughput bench)
 
 OUT = Path(__file__).resolve().parents[1] / "out"
 # (width, height) m at dx = 0.01 -> N = w * h * 1e4; steps per timed window
-SIZES = {20_000: (1.0, 2.0, 400), 50_000: (1.0, 5.0, 160), 100_000: (2.0, 5.0, 80),
-         400_000: (4.0, 10.0, 20)}
+SIZES = {2_000: (0.2, 1.0, 400), 4_000: (0.4, 1.0, 400), 20_000: (1.0, 2.0, 400),
+         50_000: (1.0, 5.0, 160), 100_000: (2.0, 5.0, 80), 400_000: (4.0, 10.0, 20)}
 STRONG = (20_000, 100_000, 400_000)
 WEAK = ((50_000, 1), (100_000, 2))
+QUICK_STRONG, QUICK_WEAK = (2_000,), ((2_000, 1), (4_000, 2))
 
 
 def timed_windows(sim, comm, steps: int, windows: int = 3) -> list[float]:
@@ -76,11 +77,12 @@ def worker(n: int, quick: bool) -> None:
 
 
 def drive(quick: bool) -> None:
+    strong_sizes, weak_cases = (QUICK_STRONG, QUICK_WEAK) if quick else (STRONG, WEAK)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_btl="self,vader,tcp",
                OMPI_MCA_btl_vader_single_copy_mechanism="none", NUMBA_NUM_THREADS="1",
                OMP_NUM_THREADS="1")
-    cases = sorted({(n, r) for n in STRONG for r in (1, 2)} | set(WEAK))
+    cases = sorted({(n, r) for n in strong_sizes for r in (1, 2)} | set(weak_cases))
     runs = []
     for n, r in cases:
         cmd = ["mpirun", "-n", str(r), sys.executable, __file__, "--worker", str(n)]
@@ -93,14 +95,14 @@ def drive(quick: bool) -> None:
     t = {(x["particles"], x["ranks"]): x["seconds_per_step"] for x in runs}
     strong = [{"particles": n, "t1_ms": 1e3 * t[n, 1], "t2_ms": 1e3 * t[n, 2],
                "speedup": t[n, 1] / t[n, 2], "efficiency": t[n, 1] / (2 * t[n, 2]),
-               "psteps_per_s_per_core_2": n / t[n, 2] / 2} for n in STRONG]
-    (n1, _), (n2, _) = WEAK
+               "psteps_per_s_per_core_2": n / t[n, 2] / 2} for n in strong_sizes]
+    (n1, _), (n2, _) = weak_cases
     weak = {"particles_per_rank": n1, "t1_ms": 1e3 * t[n1, 1], "t2_ms": 1e3 * t[n2, 2],
             "efficiency": t[n1, 1] / t[n2, 2]}
     report = {"date": str(date.today()), "machine": platform.node(),
               "cpus": os.cpu_count(), "python": sys.version.split()[0], "quick": quick,
               "strong": strong, "weak": weak, "runs": runs}
-    OUT.mkdir(exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "scaling.json").write_text(json.dumps(report, indent=2) + "\n")
     table(report)
     plot(report)
@@ -155,11 +157,15 @@ def plot(report: dict) -> None:
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--worker", type=int)
-    ap.add_argument("--quick", action="store_true")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--worker", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--quick", action="store_true",
+                    help="2,000 and 4,000 particles, an eighth of the steps (a smoke check)")
     ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of scaling.json and .png (default bench/out)")
     a = ap.parse_args()
+    OUT = a.out
     if a.worker:
         worker(a.worker, a.quick)
     elif a.plot_only:

@@ -28,9 +28,10 @@ bandwidth of this machine (shared memory) and, as stated assumptions, an InfiniB
 interconnect (alpha = 2 us, beta = 10 GB/s, alpha_c = 3 us per tree level).
 
     python bench/performance/scaling_model.py            # measures (about 75 s), then models
-    python bench/performance/scaling_model.py --model-only   # from bench/out/scaling_model.json
+    python bench/performance/scaling_model.py --model-only   # from <out>/scaling_model.json
+    python bench/performance/scaling_model.py --quick        # 2,000 and 4,000 particles
 
-Prints the tables, writes bench/out/scaling_model.json and bench/out/scaling_model.png.
+Prints the tables, writes <out>/scaling_model.json and .png (`--out`, default bench/out).
 """
 
 import argparse
@@ -50,7 +51,9 @@ from throughput import BLOCK
 
 OUT = Path(__file__).resolve().parents[1] / "out"
 N_CHECK = (20_000, 100_000, 400_000)
-SIZES = {20_000: (1.0, 2.0, 200), 100_000: (2.0, 5.0, 40), 400_000: (4.0, 10.0, 10)}
+SIZES = {20_000: (1.0, 2.0, 200), 100_000: (2.0, 5.0, 40), 400_000: (4.0, 10.0, 10),
+         2_000: (0.2, 1.0, 20), 4_000: (0.4, 1.0, 10)}
+N_QUICK = (2_000, 4_000)
 ASPECT = 10.0  # L / H of the modelled section
 HALO_ROWS = 3  # ceil(2 h / dx) at h = 1.3 dx
 HALO_SHARE = 0.5  # assumed least cost of a halo row, in owned particle-steps
@@ -184,8 +187,8 @@ def measure_workers(script: str, sizes) -> dict:
             "runs": runs}
 
 
-def measure() -> dict:
-    return measure_workers(__file__, N_CHECK)
+def measure(quick: bool = False) -> dict:
+    return measure_workers(__file__, N_QUICK if quick else N_CHECK)
 
 
 def fit(data: dict) -> dict:
@@ -273,7 +276,7 @@ def projections(k: dict) -> dict:
     return out
 
 
-def report(data: dict) -> None:
+def report(data: dict, out: Path = OUT) -> None:
     k = fit(data)
     data["fit"], data["check"], data["model"] = k, check(data, k), projections(k)
     net = k["network"]
@@ -299,12 +302,12 @@ def report(data: dict) -> None:
             extra = f" {r['halo_over_owned']:11.3f}" if "strong" in m else ""
             print(f"{r['ranks']:6d} {r['ms_per_step']:10.2f} {100 * r['efficiency']:10.1f}%"
                   + extra)
-    (OUT / "scaling_model.json").write_text(json.dumps(data, indent=2) + "\n")
-    plot(data)
-    print(f"wrote {OUT / 'scaling_model.json'} and {OUT / 'scaling_model.png'}")
+    (out / "scaling_model.json").write_text(json.dumps(data, indent=2) + "\n")
+    plot(data, out)
+    print(f"wrote {out / 'scaling_model.json'} and {out / 'scaling_model.png'}")
 
 
-def plot(data: dict) -> None:
+def plot(data: dict, out: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -325,24 +328,29 @@ def plot(data: dict) -> None:
     fig.suptitle(f"psph 2D slabs, section L/H = {ASPECT:g}, {data['date']}, {data['machine']}",
                  fontsize=9)
     fig.tight_layout()
-    fig.savefig(OUT / "scaling_model.png", dpi=120)
+    fig.savefig(out / "scaling_model.png", dpi=120)
     plt.close(fig)
 
 
 def bench_main(doc: str, name: str, worker, measure, report) -> None:
     """The command line of a scaling model: measure (or `--model-only`: read
-    bench/out/<name>.json back), then `report`; `--worker N` is one mpirun measurement."""
+    <out>/<name>.json back), then `report`; `--worker N` is one mpirun measurement."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--worker", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--model-only", action="store_true",
-                    help=f"refit and redraw from bench/out/{name}.json")
+                    help=f"refit and redraw from <out>/{name}.json")
+    ap.add_argument("--quick", action="store_true",
+                    help="two small blocks instead of the three sizes (a smoke check)")
+    ap.add_argument("--out", type=Path, default=OUT,
+                    help="directory of the JSON and PNG (default bench/out)")
     args = ap.parse_args()
     if args.worker:
         worker(args.worker)
         return
-    OUT.mkdir(exist_ok=True)
-    data = json.loads((OUT / f"{name}.json").read_text()) if args.model_only else measure()
-    report(data)
+    args.out.mkdir(parents=True, exist_ok=True)
+    data = json.loads((args.out / f"{name}.json").read_text()) if args.model_only \
+        else measure(args.quick)
+    report(data, args.out)
 
 
 def main() -> None:

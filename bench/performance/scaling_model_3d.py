@@ -1,4 +1,4 @@
-"""The scaling model of `scaling_model.py` in 3D (issue 38): slabs against two-axis cuts.
+"""The scaling model of `scaling_model.py` in 3D: slabs against two-axis cuts.
 
 Measured on this machine (`mpirun` workers of this script) on 1, 2 and 4 ranks of the
 throughput bench's 3D coupled elastic TPI block (`throughput.BLOCK_3D`, dx = 0.01 m,
@@ -29,7 +29,8 @@ at cluster scale the two-axis rows are the model's prediction.
     python bench/performance/scaling_model_3d.py              # measures (~40 s), models
     python bench/performance/scaling_model_3d.py --model-only  # from the JSON
 
-Prints the tables, writes bench/out/scaling_model_3d.json and .png.
+Prints the tables, writes <out>/scaling_model_3d.json and .png (`--out`, default bench/out;
+`--quick`: blocks of 2,000 and 6,750 particles, a smoke check).
 """
 
 import json
@@ -42,18 +43,19 @@ from throughput import BLOCK_3D
 OUT = Path(__file__).resolve().parents[1] / "out"
 # block side w and height (m) at dx = 0.01: N = w^2 hgt 1e6; steps per timed window
 SIZES = {16_000: (0.2, 0.4, 10), 54_000: (0.3, 0.6, 4), 128_000: (0.4, 0.8, 2)}
+QUICK_SIZES = {2_000: (0.1, 0.2, 2), 6_750: (0.15, 0.3, 2)}
 ROWS = 3  # ceil(2h / dx) at h = 1.3 dx
 DOMAIN = (8.0, 4.0, 1.0)  # L : W : H of the modelled hillslope block
 P_TABLE = (1, 2, 4, 16, 64, 256, 1024)
 
 
 def worker(n: int) -> None:
-    w, hgt, steps = SIZES[n]
+    w, hgt, steps = (SIZES | QUICK_SIZES)[n]
     measure_step(BLOCK_3D.format(n=n, w=w, hgt=hgt, hf=1.3), steps, warm=2)
 
 
-def measure() -> dict:
-    return measure_workers(__file__, SIZES)
+def measure(quick: bool = False) -> dict:
+    return measure_workers(__file__, QUICK_SIZES if quick else SIZES)
 
 
 def step_time(k: dict, net: dict, n: float, p: int, halo: float, neighbours: int,
@@ -153,7 +155,7 @@ def projections(k: dict) -> dict:
     return out
 
 
-def report(data: dict) -> None:
+def report(data: dict, out: Path = OUT) -> None:
     k = fit_3d(data)
     data["fit"], data["check"], data["model"] = k, check(data, k), projections(k)
     net = k["network"]
@@ -182,12 +184,12 @@ def report(data: dict) -> None:
             print(f"{r['ranks']:6d} {slab} {r['split'][0]:>4d} x {r['split'][1]:<3d} "
                   f"{g['ms_per_step']:10.1f} {100 * g['efficiency']:5.1f}% "
                   f"{g['halo_over_owned']:9.3f}")
-    (OUT / "scaling_model_3d.json").write_text(json.dumps(data, indent=2) + "\n")
-    plot(data)
-    print(f"wrote {OUT / 'scaling_model_3d.json'} and {OUT / 'scaling_model_3d.png'}")
+    (out / "scaling_model_3d.json").write_text(json.dumps(data, indent=2) + "\n")
+    plot(data, out)
+    print(f"wrote {out / 'scaling_model_3d.json'} and {out / 'scaling_model_3d.png'}")
 
 
-def plot(data: dict) -> None:
+def plot(data: dict, out: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -213,7 +215,7 @@ def plot(data: dict) -> None:
     fig.suptitle(f"psph 3D, hillslope block L:W:H = {DOMAIN}, {data['date']}, "
                  f"{data['machine']}", fontsize=9)
     fig.tight_layout()
-    fig.savefig(OUT / "scaling_model_3d.png", dpi=120)
+    fig.savefig(out / "scaling_model_3d.png", dpi=120)
     plt.close(fig)
 
 
