@@ -25,8 +25,8 @@ DEB_PKGS := openmpi-bin libopenmpi-dev libhdf5-openmpi-dev pkg-config
 STAMP := $(VENV)/.psph-env-ok
 
 .PHONY: env run test layers test-serial test-mpi bench bench-time-vs-error bench-stability bench-memory \
-	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-eq47-step bench-field \
-	bench-field-window bench-large bench-convergence bench-convergence-quick lint clean-env \
+	bench-scaling bench-ranks bench-tpi-gravity bench-collapse-beta bench-field \
+	bench-field-window bench-large bench-convergence bench-convergence-quick bench-smoke lint clean-env \
 	docs docs-check
 
 env: $(STAMP)
@@ -80,7 +80,7 @@ bench-time-vs-error: env
 bench-stability: env
 	$(VPY) bench/verification/stability.py
 
-# peak memory and set-up time per rank, 0.5M-2M particles on 1, 2 and 4 ranks (issue 15)
+# peak memory and set-up time per rank, 0.5M-2M particles on 1, 2 and 4 ranks
 bench-memory: env
 	$(VPY) bench/performance/memory.py
 
@@ -100,10 +100,6 @@ bench-tpi-gravity: env
 bench-collapse-beta: env
 	$(VPY) bench/verification/collapse_beta.py
 
-# the saturated collapse's first 10 ms at two steps: Eq. (47), beta = 0, alpha = 0, projection
-bench-eq47-step: env
-	$(VPY) bench/diagnostics/eq47_step.py
-
 # Section 4.5 clay slope on 2 ranks: the full 40 s (about 25 min) or a 0.5 s window
 bench-field: env
 	$(VPY) bench/performance/field.py
@@ -111,7 +107,7 @@ bench-field: env
 bench-field-window: env
 	$(VPY) bench/performance/field.py --window 0.5
 
-# run-out against dx and dt, local and regularised softening (issue 17): the full matrix
+# run-out against dx and dt, local and regularised softening: the full matrix
 # (hours on 2 cores; ARGS="--only REGEX" for a subset) or the CI-sized dry column (~3 min)
 bench-convergence: env
 	$(VPY) bench/verification/convergence.py $(ARGS)
@@ -122,6 +118,10 @@ bench-convergence-quick: env
 # the same scenes on 1, 2, 3 and 4 ranks compared field by field
 bench-ranks: env
 	$(VPY) bench/verification/rank_invariance.py
+
+# every bench script's smallest case (or --help) in a scratch directory: tests/test_bench_smoke.py
+bench-smoke: env
+	$(VPY) -m pytest -q -p no:cacheprovider tests/test_bench_smoke.py
 
 # the documentation site (Sphinx + MyST) into docs/_build/html: any warning fails, internal
 # links included; docs/reference/scene_keys.md is generated from the scene schema
