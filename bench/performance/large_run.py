@@ -39,7 +39,7 @@ STEPS = 100
 
 
 SCENE = "collapse_dry"  # `--scene`
-# collapse_3d's floor is a surface lined with boundary particles since 2026-12-05, which
+# collapse_3d's floor is a surface lined with boundary particles, which
 # every rank builds whole (three rows of the floor's area / dx^2: 2.7 M at dx = 0.0058);
 # the scale run keeps the box's mirror floor it was measured with
 SCENE_SETTINGS = {"collapse_3d": ["boundaries.surfaces=[]",

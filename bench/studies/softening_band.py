@@ -41,6 +41,7 @@ from pathlib import Path
 import numba as nb
 import numpy as np
 
+from psph.kernels.bundles import CellList, DruckerPrager, NonlocalFields
 from psph.kernels.neighbours import cell_lists_indexed
 from psph.kernels.nonlocal_strain import nonlocal_strain, rings_for
 from psph.kernels.plasticity import dp_constants, dp_return
@@ -92,9 +93,9 @@ def _run(n, dy, steps, dt, speed, rho, damping, bulk, shear, sigma0, c_p, dip, d
         if length > 0.0:
             for j in range(n_real):
                 eps_all[j] = state[j % n, 1]
-            nonlocal_strain(n, n_real, x, vol, eps_all, material, lengths, weights, cell_of,
-                            cell_start, order, ncell, rings, plastic_cell, no_walls,
-                            no_pos, state[:, 2])
+            nonlocal_strain(n, n_real, NonlocalFields(x, vol, eps_all, material), lengths,
+                            weights, CellList(cell_of, cell_start, order, ncell), rings,
+                            plastic_cell, no_walls, no_pos, state[:, 2])
         else:
             for k in range(n):
                 state[k, 2] = state[k, 1]
@@ -105,8 +106,8 @@ def _run(n, dy, steps, dt, speed, rho, damping, bulk, shear, sigma0, c_p, dip, d
             tau = state[k, 0] + dt * shear * (v_hi - v_lo) / dy
             yk = (k + 0.5) * dy
             ck = c_p * (1.0 - dip * math.exp(-((yk - 0.5 * height) / dip_width) ** 2))
-            r = dp_return(sigma0, sigma0, sigma0, tau, state[k, 2], bulk, shear, 0.0, 0.0,
-                          ck, 0.0, 0.0, eta, 0.0)
+            r = dp_return(sigma0, sigma0, sigma0, tau, state[k, 2], bulk, shear,
+                          DruckerPrager(0.0, 0.0, ck, 0.0, 0.0, eta, 0.0, math.inf, False))
             state[k, 0] = r[3]
             state[k, 1] += r[5]
             i1 = r[0] + r[1] + r[2]

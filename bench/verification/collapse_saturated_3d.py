@@ -19,17 +19,15 @@ scenes set 1.0 and 0.5 (its TOML says why;
 checks the two). Monaghan's viscosity acts as nu = alpha h c / (2 (d + 2)), so the slab's
 alpha is the 2D scene's times 5 / 4, the continuum's ratio (on the lattice at h = 1.2 dx
 the 3D term is 0.86 as strong for a shear wave and 0.81 for a longitudinal one,
-`bench/diagnostics/av_viscosity_dims.py`). The artificial stress's moment on the lattice
+`bench/tools/lattice_sums.py --viscosity`). The artificial stress's moment on the lattice
 (bench/tools/lattice_sums.py) is 0.614 as strong on the cubic lattice as on the square one
 at h = 1.2 dx and n = 2.55, so the slab's epsilon is the 2D scene's over that ratio.
 
-`--alpha` and `--epsilon` set the slab's own. The runs of docs/vv/collapse_saturated_3d.md
-made before 2026-12-06, afternoon, were at alpha 1.0 and epsilon 0.5 (`--alpha 1
---epsilon 0.5`), those "at alpha 1.25" or `--nu-2d` at `--epsilon 0.5`, and those with
-`--nu-2d --as-2d` at the scene's values (no flag). The two flags tag the slab's run
-directory, JSON and PNG `_a<alpha>` and `_e<epsilon>` after the other tags; the 2D run is
-the untagged one, so with `--reuse` it is shared. Several psi in one command share one
-JSON and PNG; a later command with the same tags overwrites them.
+`--alpha` and `--epsilon` set the slab's own (`--alpha 1 --epsilon 0.5`: the 2D scenes'
+numbers). The two flags tag the slab's run directory, JSON and PNG `_a<alpha>` and
+`_e<epsilon>` after the other tags; the 2D run is the untagged one, so with `--reuse` it is
+shared. Several psi in one command share one JSON and PNG; a later command with the same
+tags overwrites them.
 
 The 2D scene runs on one rank, the slab under `mpirun -n NP` (default 2); the runs go to
 runs/collapse_saturated_3d/psi<psi>_2d and _3d (with `--dx` or `--end`, psi<psi>_dx<dx>_end<end>_2d

@@ -1,0 +1,90 @@
+"""Every bench script runs against the code as it is.
+
+Each script under bench/ (found by glob: a new one is covered without being listed) runs its
+smallest case, `--quick` (or the case named in `ARGS`), with `--out` a scratch directory,
+and must exit 0; those whose smallest case is still longer than this suite's budget (about
+4 minutes on 2 cores, one worker) run `--help` only (`HELP_ONLY`, each with its smallest
+case's time). The modules in `LIBRARIES` are imported by scripts, not run. `MPIRUN`: the
+scripts measured on the ranks they are started on, launched under `mpirun -n 2`.
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "bench"
+LIBRARIES = {"verification/scene_runs.py"}
+# CPU seconds of the smallest case on an idle core, measured: over the budget
+HELP_ONLY = {
+    "performance/compare_revisions.py": "two git worktrees, each compiling its kernels",
+    "performance/field.py": "the slope's gravity loading on 2 ranks",
+    "performance/halo_layouts.py": "two layouts on 4 ranks",
+    "performance/large_run.py": "five runs on 1, 2 and 4 ranks",
+    "performance/memory.py": "four runs on 1 and 2 ranks",
+    "performance/scaling.py": "four runs on 1 and 2 ranks",
+    "performance/scaling_model.py": "six runs on 1, 2 and 4 ranks",
+    "performance/scaling_model_3d.py": "six 3D runs on 1, 2 and 4 ranks",
+    "verification/collapse_beta.py": "two saturated collapses on 2 ranks",
+    "verification/collapse_saturated_3d.py": "a 2D collapse and a 3D slab on 2 ranks",
+    "verification/convergence.py": "a dry collapse on 2 ranks",
+    "verification/projection_stability.py": "a column to T_v = 0.01",
+    "verification/rank_invariance.py": "a column on 1 and on 2 ranks",
+    "verification/slope_3d.py": "a 2D slope and its 3D slab on 2 ranks",
+    "verification/time_vs_error.py": "two columns to T_v = 0.02",
+}
+ARGS = {
+    "tools/slope_3d_grids.py": [],  # seconds as it is
+    "tools/docs_figure.py": None,  # SRC DST: a picture made here
+}
+MPIRUN = {"performance/throughput.py", "verification/default_run.py"}
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "NUMBA_NUM_THREADS": "1",
+           "OMP_NUM_THREADS": "1"}
+SCRIPTS = sorted(p.relative_to(BENCH).as_posix() for p in BENCH.rglob("*.py")
+                 if p.relative_to(BENCH).as_posix() not in LIBRARIES)
+
+
+def _command(script: str, out: Path) -> list[str]:
+    """The script's smallest case (or --help) with its output under `out`."""
+    cmd = [sys.executable, str(BENCH / script)]
+    if script in HELP_ONLY:
+        return cmd + ["--help"]
+    if script == "tools/docs_figure.py":
+        from PIL import Image
+
+        src = out / "wide.png"
+        Image.fromarray(np.zeros((20, 40, 3), np.uint8)).save(src)
+        return cmd + [str(src), str(out / "narrow.png"), "--width", "10"]
+    args = ARGS.get(script, ["--quick"])
+    cmd += args + ["--out", str(out)]
+    if script in MPIRUN:
+        cmd = ["mpirun", "-n", "2"] + cmd
+    return cmd
+
+
+def test_every_script_is_known_or_runs_its_quick_case():
+    """The lists name scripts that exist (a moved or removed one is taken off them)."""
+    listed = set(HELP_ONLY) | set(ARGS) | MPIRUN | LIBRARIES
+    assert listed <= set(SCRIPTS) | LIBRARIES, listed - set(SCRIPTS)
+    assert all((BENCH / lib).is_file() for lib in LIBRARIES)
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_bench_script_runs(script, tmp_path):
+    if script in MPIRUN and shutil.which("mpirun") is None:
+        pytest.skip("needs mpirun")
+    cmd = _command(script, tmp_path)
+    res = subprocess.run(cmd, cwd=tmp_path, env={**os.environ, **MPI_ENV},
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, f"{' '.join(cmd)}\n{res.stdout[-1500:]}\n{res.stderr[-3000:]}"
+    if script in HELP_ONLY:
+        assert "--quick" in res.stdout or "--smoke" in res.stdout, res.stdout
+    elif script != "tools/docs_figure.py":
+        assert any(tmp_path.iterdir()), f"{script} wrote nothing into --out"
