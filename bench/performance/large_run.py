@@ -158,6 +158,7 @@ def plot(rows: list[dict], stem: str = "large_run") -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
+    global SCENE, STEPS, OUT
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--dx", type=float, default=0.0009)
     ap.add_argument("--scene", default="collapse_dry",
@@ -174,7 +175,6 @@ def main(argv: list[str] | None = None) -> int:
                     help="directory of the runs (removed after), the JSON and the PNG "
                          "(default bench/out)")
     args = ap.parse_args(argv)
-    global SCENE, STEPS, OUT
     if args.quick:
         args.dx, args.steps = 0.04, 2
     SCENE = args.scene

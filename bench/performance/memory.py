@@ -92,6 +92,7 @@ def plot(rows: list[dict], name: str = "memory") -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
+    global OUT
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true",
                     help="dx 0.01 and 0.007 m on 1 and 2 ranks (a minute)")
@@ -102,7 +103,6 @@ def main(argv: list[str] | None = None) -> int:
                     help="directory of the runs (removed after), the JSON and the PNG "
                          "(default bench/out)")
     args = ap.parse_args(argv)
-    global OUT
     OUT = args.out
     OUT.mkdir(parents=True, exist_ok=True)
     path = OUT / ("memory-quick.json" if args.quick else
