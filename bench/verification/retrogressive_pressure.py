@@ -4,7 +4,7 @@ finished runs.
     python bench/verification/retrogressive_pressure.py bench/out/field_retrogressive_k0_0.5 \
         bench/out/field_retrogressive_k0_1.5
     python bench/verification/retrogressive_pressure.py --quick
-        # retrogressive_k0_0.5 at dx = 2 m to 0.02 s (run into <out> first), checked
+        # retrogressive_k0_0.5 at dx = 2 m, 0.02 s of loading, to 0.02 s; checked
 
 For each run directory:
 
@@ -198,7 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs", nargs="*", type=Path, help="finished runs' output directories")
     ap.add_argument("--quick", action="store_true",
-                    help="run retrogressive_k0_0.5 at dx = 2 m to 0.02 s into <out> first, "
+                    help="run retrogressive_k0_0.5 at dx = 2 m, 0.02 s of gravity loading, to "
+                         "0.02 s into <out> first, "
                          "and check it (a smoke check)")
     ap.add_argument("--out", type=Path, default=ROOT / "bench" / "out",
                     help="directory of retrogressive_pressure.json (default bench/out)")
@@ -206,7 +207,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.quick:
         run = args.out / "retrogressive_pressure-run"
         start_run(run, "retrogressive_k0_0.5", 1,
-                  ["particles.dx=2.0", "time.end=0.02", "output.interval=0.01"], False)
+                  ["particles.dx=2.0", "initial.equilibrate=0.02", "time.end=0.02",
+                   "output.interval=0.01"], False)
         args.runs.append(run)
     if not args.runs:
         ap.error("no run directory given (or --quick)")
