@@ -15,7 +15,7 @@ settlement error / final settlement over T_v in [0.1, 0.5].
     python bench/verification/time_vs_error.py --jobs 2   # the same on two cores (~55 min)
     python bench/verification/time_vs_error.py --quick    # dx = 0.02, k = 8e-4 column (~3 min)
     python bench/verification/time_vs_error.py --geotaichi  # GeoTaichi's start (~5 min)
-    python bench/verification/time_vs_error.py --smoke    # the --quick column to T_v = 0.02,
+    python bench/verification/time_vs_error.py --smoke    # the --quick column to T_v = 0.005,
                                                           # explicit and one TPI case
     python bench/verification/time_vs_error.py --jobs 2 \
         --only 'explicit|alpha=0.7|projection dt=1.2'
@@ -251,7 +251,7 @@ def main() -> None:
                     help="run only the cases whose label matches (re.search), e.g. "
                          "'explicit|projection dt=1.2'; the table says which were run")
     ap.add_argument("--smoke", action="store_true",
-                    help="the --quick column to T_v = 0.02, explicit and TPI at dt = 1e-5, "
+                    help="the --quick column to T_v = 0.005, explicit and TPI at dt = 1e-5, "
                          "alpha = 0.7 (a smoke check)")
     ap.add_argument("--out", type=Path, default=OUT,
                     help="directory of the JSON and PNG (default bench/out)")
@@ -261,7 +261,7 @@ def main() -> None:
     if args.smoke:
         args.quick, args.geotaichi = True, False
         args.only = args.only or "^explicit$|^tpi dt=1e-05 alpha=0.7$"
-        BASE[0] = "verification.tv=[0.02]"
+        BASE[0] = "verification.tv=[0.005]"
     args.out.mkdir(parents=True, exist_ok=True)
     jpath, ppath = args.out / f"time_vs_error{tag}.json", args.out / f"time_vs_error{tag}.png"
     if args.plot_only:
