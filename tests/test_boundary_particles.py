@@ -11,6 +11,7 @@ from psph.config.load import load_scene
 from psph.geometry.polylines import _nearest_on_polyline, boundary_particles
 from psph.io.snapshots import read_snapshots
 from psph.kernels.boundary import MOTION_FIXED, boundary_state
+from psph.kernels.bundles import BoundaryPoints, BoundaryRows, CellList, WallFields
 from psph.kernels.neighbours import cell_lists
 from tests.helpers import SCENES, assert_bad_input
 from tests.test_bad_input import run_cli
@@ -149,10 +150,12 @@ def test_boundary_pressure_extends_the_hydrostatic_head():
     z = np.zeros
     src = np.arange(nb)
     for drained in (False, True):
-        boundary_state(ns, ns, nb, src, np.full(nb, MOTION_FIXED), z(nb),
-                       np.full(nb, drained), bn, x, z((n, 2)), z((n, 2)), z((n, 4)), p,
-                       p.copy(), np.full(n, 0.4), np.ones(n), np.ones(n), z((n, 2)),
-                       np.array([0.0, -rho_g]), cell_of, cell_start, order, ncell, h)
+        pts = BoundaryPoints(np.full(nb, MOTION_FIXED), z(nb), np.full(nb, drained), bn,
+                             z((nb, 2)), z(nb), z(nb))
+        f = WallFields(x, z((n, 2)), z((n, 2)), z((n, 4)), p, p.copy(), np.full(n, 0.4),
+                       z(n), np.ones(n), np.ones(n), z((n, 2)), key)
+        boundary_state(ns, BoundaryRows(ns, nb, src), pts, f, np.array([0.0, -rho_g]),
+                       CellList(cell_of, cell_start, order, ncell), h)
         reached = p[ns:] != 0.0  # the deepest row (2.5 dx) only reaches soil at the line
         assert reached[first_row].all()
         if drained:

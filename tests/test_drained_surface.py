@@ -6,6 +6,15 @@ import numpy as np
 import pytest
 from helpers import sums_for
 
+from psph.kernels.bundles import (
+    GhostSources,
+    ImageFields,
+    ImageWeights,
+    PairFields,
+    PairParams,
+    WallFields,
+    Walls,
+)
 from psph.kernels.ghosts import make_ghosts
 from psph.kernels.images import image_sums, image_weights
 from psph.kernels.laplacian import apply_operator, lattice_moment, pair_weights
@@ -23,6 +32,17 @@ def _column(nx=12, ny=12):
     return np.array(np.meshgrid(gx, gy, indexing="xy")).reshape(2, -1).T
 
 
+IMAGE_PAR = PairParams(H).typed()  # image_sums reads h, tpi_alpha = 0 and no body force
+
+
+def _sweep_fields(x, p, vol, perm):
+    """The pair sweep's fields with what `image_sums` reads (the others zero)."""
+    n = len(x)
+    z = np.zeros
+    return PairFields(x, z((n, 2)), z((n, 2)), z((n, 4)), p, p.copy(), z(n), vol, z(n), perm,
+                      z((n, 2)), z((n, 3)))
+
+
 def _laplacian(x, p, planes):
     """Eq. (23) with the images of `planes` and the lattice normalisation, as the solver
     takes it: sA, sAp and Q over the recorded pairs, then lap = sAp - p sA - grad p . Q."""
@@ -30,8 +50,7 @@ def _laplacian(x, p, planes):
     vol = np.full(n, DX * DX)
     pairs = (np.zeros((40 * n, 2), np.int64), np.zeros((40 * n, 2)))
     s, n_pairs = sums_for(x, H, vol, p=p, pairs=pairs)
-    image_sums(n, n_pairs, pairs[0], x, p, p.copy(), vol, np.ones(n), planes, H, 0.0, 0.0,
-               0.0, s)
+    image_sums(n, n_pairs, pairs[0], _sweep_fields(x, p, vol, np.ones(n)), planes, IMAGE_PAR, s)
     s[:, DARCY] /= lattice_moment(DX, H)
     m = s[:, MOMENT].reshape(-1, 2, 2)
     grad = np.einsum("in,inm->im", s[:, GP], np.linalg.inv(m))
@@ -104,10 +123,10 @@ def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
 
     def images(m, prs, wts):
         s = np.zeros_like(base)
-        image_sums(n, m, prs, x, q, q.copy(), vol, ones, planes, H, 0.0, 0.0, 0.0, s)
+        image_sums(n, m, prs, _sweep_fields(x, q, vol, ones), planes, IMAGE_PAR, s)
         wd, wo, storage = np.zeros(m), np.zeros(m), np.zeros(n)
-        image_weights(n, m, prs, x, ones, ones, vol, planes, H, 1.0, 0.0, wts, wd, wo,
-                      storage)
+        image_weights(n, m, prs, ImageFields(x, ones, ones, vol), planes, H, 1.0, 0.0, wts,
+                      ImageWeights(wd, wo, storage))
         return s, wd, wo, storage
 
     own, _, _, own_storage = images(0, pr[:0], w[:0])
@@ -135,8 +154,8 @@ def test_images_do_not_rely_on_a_rows_pairs_following_one_another():
     two = np.array([[0.5, TOP - 1.95 * H], [0.5, TOP - 0.02 * H]])
     for pair in ([[0, 1]], [[1, 0]]):
         wd, wo = np.zeros(1), np.zeros(1)
-        image_weights(2, 1, np.array(pair), two, np.ones(2), np.ones(2), np.ones(2),
-                      planes[:1], H, 1.0, 0.0, np.zeros(1), wd, wo, np.zeros(2))
+        image_weights(2, 1, np.array(pair), ImageFields(two, np.ones(2), np.ones(2), np.ones(2)),
+                      planes[:1], H, 1.0, 0.0, np.zeros(1), ImageWeights(wd, wo, np.zeros(2)))
         assert wd[0] > 0.0 and wo[0] == -wd[0]
 
 
@@ -148,12 +167,12 @@ def test_operator_with_images_is_symmetric_positive_definite_and_matches_the_sum
     x, vol, q, s, pr, g = _swept_column(3)
     n, n_pairs = len(x), len(pr)
     planes = np.array([[1.0, TOP, -1.0, 1.0]])
-    image_sums(n, n_pairs, pr, x, q, q.copy(), vol, np.ones(n), planes, H, 0.0, 0.0, 0.0, s)
+    image_sums(n, n_pairs, pr, _sweep_fields(x, q, vol, np.ones(n)), planes, IMAGE_PAR, s)
     w, wd, wo = np.zeros(n_pairs), np.zeros(n_pairs), np.zeros(n_pairs)
     pair_weights(n_pairs, pr, g, x, np.ones(n), np.ones(n), 1.0, 0.0, w)
     storage = np.zeros(n)
-    image_weights(n, n_pairs, pr, x, np.ones(n), np.ones(n), vol, planes, H, 1.0, 0.0, w, wd,
-                  wo, storage)
+    image_weights(n, n_pairs, pr, ImageFields(x, np.ones(n), np.ones(n), vol), planes, H, 1.0,
+                  0.0, w, ImageWeights(wd, wo, storage))
     fixed = np.zeros(n, bool)
     S = np.zeros((n, n))
     for j in range(n):
@@ -182,8 +201,8 @@ def test_correction_images_pin_the_operator_at_the_plane_before_it_drains():
     pair_weights(n_pairs, pr, g, x, np.ones(n), rho, 0.0, dt, w)
     storage = np.zeros(n)
     planes = np.array([[1.0, TOP, -1.0, 0.0]])
-    image_weights(n, n_pairs, pr, x, np.ones(n), rho, vol, planes, H, 1.0, dt, w, wd, wo,
-                  storage)
+    image_weights(n, n_pairs, pr, ImageFields(x, np.ones(n), rho, vol), planes, H, 1.0, dt, w,
+                  ImageWeights(wd, wo, storage))
     S = np.zeros((n, n))
     for j in range(n):
         e = np.zeros(n)
@@ -213,11 +232,12 @@ def test_drained_wall_ghosts_carry_minus_p(drained):
     v, v_slip, acc = z((cap, 2)), z((cap, 2)), z((cap, 2))
     src, sign = np.zeros(cap, np.int64), np.ones(cap)
     head_b = np.array([0.0, -9810.0])
-    ng = make_ghosts(n, cap, 2 * H, 100.0, np.array([1, 0]), np.array([0.0, 0.0]),
-                     np.array([1.0, 1.0]), np.array([True, False]),
-                     np.array([drained, False]), x, v, v_slip, z((cap, 4)), p, p_prev,
-                     np.full(cap, 0.4), np.ones(cap), np.ones(cap), np.ones(cap), acc,
-                     np.arange(cap, dtype=float), head_b, np.zeros(2), src, sign)
+    walls = Walls(np.array([1, 0]), np.array([0.0, 0.0]), np.array([1.0, 1.0]),
+                  np.array([True, False]), np.array([drained, False]))
+    f = WallFields(x, v, v_slip, z((cap, 4)), p, p_prev, np.full(cap, 0.4), np.ones(cap),
+                   np.ones(cap), np.ones(cap), acc, np.arange(cap, dtype=float))
+    ng = make_ghosts(n, cap, 2 * H, 100.0, walls, f, head_b, np.zeros(2),
+                     GhostSources(src, sign))
     assert ng == 4  # particle 0: bottom, side, corner; particle 1: bottom
     g = np.arange(n, n + ng)
     bottom = np.isclose(x[g, 1], -0.05) & (x[g, 0] > 0)

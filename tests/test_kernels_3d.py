@@ -422,7 +422,13 @@ def test_projection_kernels_in_3d():
     """The projection's pair weights (2F_ab (k_scale kbar + rho_scale / rhobar)) against
     numpy, and its right-hand side for a uniform p and a linear velocity: -V_i div v
     inside (the Darcy term of a uniform pressure vanishes), the storage n / (K_l dt)."""
-    from psph.kernels.bundles import PairFields, PairParams, PairRecord, sorted_cells
+    from psph.kernels.bundles import (
+        FluidParams,
+        PairFields,
+        PairParams,
+        PairRecord,
+        sorted_cells,
+    )
     from psph.kernels.interactions import pair_sums_3d
     from psph.kernels.laplacian import pair_weights_3d
     from psph.kernels.projection import projection_rhs_3d
@@ -452,8 +458,8 @@ def test_projection_kernels_in_3d():
     assert np.allclose(w, f2 * (2.0 * 0.5 * (perm[a] + perm[b]) + 3.0e-6 * 2.0 / (rho[a] + rho[b])),
                        rtol=1e-12)
     storage, rhs = z(n), z(n)
-    projection_rhs_3d(n, sums, p, perm, fields.vol, fields.poro, 1000.0, 0.0, 0.0, 9810.0,
-                      1.0e9, 1e-4, storage, rhs, 0.0)
+    projection_rhs_3d(n, sums, p, perm, fields.vol, fields.poro,
+                      FluidParams(1000.0, 9810.0, 1.0e9, 0.0, 0.0, 0.0), 1e-4, storage, rhs)
     inner = np.all((x > 2.5 * h) & (x < m * dx - 2.5 * h), axis=1)
     assert inner.sum() > 0
     assert np.allclose(storage, 0.4 / (1.0e9 * 1e-4))
@@ -466,6 +472,7 @@ def test_wall_ghosts_in_3d_at_a_corner():
     velocity reversed across each wall, the shear components on each wall's plane
     reversed (twice across an edge or the corner: kept), the hydrostatic head continued
     below the floor, and keys that differ."""
+    from psph.kernels.bundles import GhostSources, WallFields, Walls
     from psph.kernels.ghosts import make_ghosts
 
     cap = 16
@@ -483,9 +490,9 @@ def test_wall_ghosts_in_3d_at_a_corner():
     key, src, sign = z(cap), z(cap, np.int64), np.ones(cap)
     axis = np.array([0, 1, 2], np.int64)
     head_b = np.array([0.0, 0.0, -9810.0])  # rho_l b, gravity along -z
-    ng = make_ghosts(1, cap, 0.1, 1000.0, axis, z(3), np.ones(3), np.zeros(3, np.bool_),
-                     np.zeros(3, np.bool_), x, v, v_slip, stress, p, p_prev, poro, vol, rho,
-                     perm, acc, key, head_b, z(3), src, sign)
+    walls = Walls(axis, z(3), np.ones(3), np.zeros(3, np.bool_), np.zeros(3, np.bool_))
+    f = WallFields(x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key)
+    ng = make_ghosts(1, cap, 0.1, 1000.0, walls, f, head_b, z(3), GhostSources(src, sign))
     assert ng == 7 and np.all(src[1:8] == 0)
     assert len(set(key[:8].tolist())) == 8
     # every combination of the three walls once: each edge mirrors the face ghost, not
@@ -523,11 +530,15 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
     par = PairParams(h, rho_l_b0=0.0, rho_l_b1=0.0, rho_l_b2=-9810.0, record=True).typed()
     z = np.zeros
 
+    def pair_fields(pos, pres, k):
+        count = len(pos)
+        return PairFields(pos, z((count, 3)), z((count, 3)), z((count, 6)), pres, pres.copy(),
+                          np.full(count, 0.4), np.full(count, dx ** 3), np.full(count, 2000.0),
+                          k, z((count, 3)), z((count, 6)))
+
     def sweep(pos, pres, k):
         count = len(pos)
-        fields = PairFields(pos, z((count, 3)), z((count, 3)), z((count, 6)), pres,
-                            pres.copy(), np.full(count, 0.4), np.full(count, dx ** 3),
-                            np.full(count, 2000.0), k, z((count, 3)), z((count, 6)))
+        fields = pair_fields(pos, pres, k)
         sums = z((count, lay.NSUMS))
         rec = PairRecord(z((64 * count, 2), np.int64), z((64 * count, 3)))
         got = pair_sums_3d(count, n, count, fields,
@@ -536,8 +547,7 @@ def test_drained_plane_images_in_3d_equal_mirrored_particles():
 
     sums, rec, m_pairs = sweep(x, p, perm)
     planes = np.array([[2.0, top, -1.0, 1.0]])  # z = top, soil below, active
-    image_sums_3d(n, m_pairs, rec.pairs, x, p, p.copy(), np.full(n, dx ** 3), perm, planes, h,
-                  0.0, 0.0, 0.0, sums, -9810.0)
+    image_sums_3d(n, m_pairs, rec.pairs, pair_fields(x, p, perm), planes, par, sums)
     mirrored = x.copy()
     mirrored[:, 2] = 2.0 * top - x[:, 2]
     both, _, _ = sweep(np.vstack([x, mirrored]), np.concatenate([p, -p]),
@@ -611,6 +621,8 @@ def test_artificial_stress_in_3d_is_minus_epsilon_times_the_tensile_part():
 def _filters_3d(x, h, stress, p):
     """The 3D Shepard step's three filters on one cloud: (p by Eq. 46, stress by the
     Shepard sum, stress by MLS)."""
+    from psph.kernels.bundles import CellList
+    from psph.kernels.neighbours import cell_lists_indexed
     from psph.kernels.shepard import (
         mls_stress_3d,
         moment_width,
@@ -619,15 +631,15 @@ def _filters_3d(x, h, stress, p):
     )
 
     n = len(x)
-    cells = cell_lists(x, h)
+    cells = CellList(*cell_lists_indexed(x, h))
     vol = np.full(n, 1e-3)
     q, q_prev = p.copy(), p - 1.0
-    shepard_pressure_3d(n, n, x, q, q_prev, vol, np.full(n, math.inf), 0.0, *cells, h,
+    shepard_pressure_3d(n, n, x, q, q_prev, vol, np.full(n, math.inf), 0.0, cells, h,
                         np.zeros((n, 2)))
     assert np.allclose(q - q_prev, 1.0, rtol=0, atol=1e-9 * np.abs(p).max())
     s0, s1 = stress.copy(), stress.copy()
-    shepard_stress_3d(n, n, x, s0, vol, *cells, h, np.zeros((n, 7)))
-    mls_stress_3d(n, n, x, s1, vol, *cells, h, np.zeros((n, moment_width(3, True, 6))))
+    shepard_stress_3d(n, n, x, s0, vol, cells, h, np.zeros((n, 7)))
+    mls_stress_3d(n, n, x, s1, vol, cells, h, np.zeros((n, moment_width(3, True, 6))))
     return q, s0, s1
 
 

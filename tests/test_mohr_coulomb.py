@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from psph.kernels.bundles import DruckerPrager
 from psph.kernels.plasticity import dp_return_3d, lode_sin_cos, mc_constants
 
 E, NU = 20e6, 0.3
@@ -33,7 +34,8 @@ def deviator_direction(s):
 
 
 def ret(s, eps=0.0, phi_r=PHI, c_r=C, psi0=0.0, eta=0.0, s_f=0.0, mc=True):
-    return dp_return_3d(*s, eps, K, G, PHI, phi_r, C, c_r, psi0, eta, s_f, math.inf, -1.0, mc)
+    law = DruckerPrager(PHI, phi_r, C, c_r, psi0, eta, s_f, math.inf, mc)
+    return dp_return_3d(*s, eps, K, G, law, -1.0)
 
 
 def random_trials(n, seed=3):
@@ -130,7 +132,7 @@ def test_the_default_is_the_plane_strain_cone():
     trial = (-60e3, -60e3, -200e3, 0.0, 0.0, 0.0)  # triaxial compression, outside both
     plane = ret(trial, mc=False)
     mc = ret(trial)
-    assert plane == dp_return_3d(*trial, 0.0, K, G, PHI, PHI, C, C, 0.0, 0.0, 0.0)
+    assert plane == dp_return_3d(*trial, 0.0, K, G, DruckerPrager(PHI, PHI, C, C, 0.0, 0.0, 0.0))
     q = lambda s: math.sqrt(0.5 * ((s[0] - s[1]) ** 2 + (s[1] - s[2]) ** 2  # noqa: E731
                                    + (s[2] - s[0]) ** 2))
     assert q(mc) > 1.3 * q(plane)

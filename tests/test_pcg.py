@@ -143,6 +143,7 @@ def test_compiled_serial_pcg_gives_the_same_bits():
     """`kernels/pcg_serial.py` (one rank) against `psph.solver.pcg` with the exact dot products
     of one rank: same iterates, iteration count, residual and solution, to the last bit,
     with imposed rows and images' split weights (w_diag != w_off)."""
+    from psph.kernels.bundles import CGWork, DotWork, GhostSources, ScaledOperator
     from psph.kernels.pcg_serial import pcg_serial
 
     x, vol, perm, rho, pairs, g, _ = _cloud()
@@ -170,12 +171,12 @@ def test_compiled_serial_pcg_gives_the_same_bits():
     c_diag, c_off, c_storage = np.zeros(len(pairs)), np.zeros(len(pairs)), np.zeros(n)
     operator_coefficients(n, len(pairs), pairs, w, w_off, vol, s, c_diag, c_off, c_storage,
                           np.zeros(n))
-    it, r, ok = pcg_serial(n, n, len(pairs), pairs, c_diag, c_off, c_storage, fixed, diag, rhs,
-                           p_nb,
-                           np.zeros(0, np.int64), np.ones(0), 1e-10, 2 * n, wk.r, wk.u,
-                           wk.w, wk.d, wk.sd, np.zeros(EXPANSION_CAP),
-                           np.zeros(CHUNK_ROW, np.int64), np.zeros(BLOCK),
-                           np.zeros(CHUNKS, np.int64), np.zeros(0))
+    op = ScaledOperator(pairs, c_diag, c_off, c_storage, fixed, diag)
+    dots = DotWork(np.zeros(CHUNK_ROW, np.int64), np.zeros(BLOCK), np.zeros(CHUNKS, np.int64),
+                   np.zeros(EXPANSION_CAP))
+    it, r, ok = pcg_serial(n, n, len(pairs), op, rhs, p_nb,
+                           GhostSources(np.zeros(0, np.int64), np.ones(0)), 1e-10, 2 * n,
+                           CGWork(wk.r, wk.u, wk.w, wk.d, wk.sd), dots, np.zeros(0))
     assert res.converged and ok and it == res.iterations and r == res.residual
     assert np.array_equal(p_nb, p_py)
 

@@ -59,11 +59,74 @@ def test_summary_lists_stages_and_times(tmp_path):
     scene = load_scene("terzaghi_tpi", SMALL + ["stabilisation.shepard_every=4"])
     run(scene, tmp_path, comm=MPI.COMM_SELF, quiet=True)
     s = json.loads((tmp_path / "summary.json").read_text())
-    assert s["stages_run"] == ["reset_halo", "ghosts", "neighbours", "drained_planes",
-                               "shepard[every 4]",
+    assert s["stages_run"] == ["drained_planes", "reset_halo", "ghosts", "neighbours",
+                               "shepard[every 4]", "refresh[p,p_prev][every 4]",
                                "interactions[momentum,pressure]", "update[explicit->tpi,elastic]"]
     assert set(s["stage_seconds"]) == set(s["stages_run"])
     steps = s["steps"]
     assert s["stage_seconds"]["neighbours"]["calls"] == steps
     assert s["stage_seconds"]["shepard[every 4]"]["calls"] == (steps + 3) // 4
+    assert s["stage_seconds"]["refresh[p,p_prev][every 4]"]["calls"] == (steps + 3) // 4
     assert all(v["max_s"] > 0 for v in s["stage_seconds"].values())
+
+
+def _names(stages):
+    return [s.name for s in stages]
+
+
+def test_search_and_refreshes_follow_the_declarations():
+    """The search comes before the first stage on neighbours after x moved; a field
+    written on owned rows is refreshed before a later stage reads it on neighbours, once,
+    and only the fields that stage reads."""
+    from psph.solver.pipeline import Stage, assemble
+
+    refreshed = []
+    search = [Stage("exchange", lambda: None), Stage("neighbours", lambda: None)]
+    physics = [
+        Stage("planes", lambda: None),
+        Stage("filter", lambda: None, reads=frozenset({"p"}), writes=frozenset({"p"}),
+              neighbours=True, every=5),
+        Stage("sweep", lambda: None, reads=frozenset({"x", "p", "v"}), neighbours=True),
+        Stage("kick", lambda: None, writes=frozenset({"v", "acc"})),
+        Stage("velocity", lambda: None, reads=frozenset({"v"}), neighbours=True),
+        Stage("shift", lambda: None, reads=frozenset({"vol"}), writes=frozenset({"x"}),
+              neighbours=True),
+        Stage("update", lambda: None, writes=frozenset({"x", "v", "p"})),
+        Stage("after", lambda: None, reads=frozenset({"v"}), neighbours=True),
+    ]
+    stages = assemble(physics, search, refreshed.append)
+    assert _names(stages) == ["planes", "exchange", "neighbours", "filter",
+                              "refresh[p][every 5]", "sweep", "kick", "refresh[v]",
+                              "velocity", "shift", "update", "exchange", "neighbours",
+                              "after"]
+    by_name = {s.name: s for s in stages}
+    refresh = by_name["refresh[p][every 5]"]
+    assert refresh.every == 5 and refresh.after == (by_name["filter"],)
+    refresh.run()
+    assert refreshed == [("p",)]
+    # a derived refresh runs in a pass only when its writer ran in that pass
+    assert not refresh.due(0, 1)
+    by_name["filter"].last_pass = 1
+    assert refresh.due(0, 1) and not refresh.due(0, 2) and not refresh.due(1, 1)
+
+
+def test_no_physics_stage_searches_or_exchanges():
+    """Exchange, ghosts and the neighbour search are called only by the search stages
+    and the derived refreshes (`Stages._refresh_fields`), never inside physics."""
+    import ast
+    import inspect
+
+    from psph.solver import stages
+
+    tree = ast.parse(inspect.getsource(stages))
+    allowed = {"_exchange", "_ghosts", "_boundary_rows", "_neighbours", "_boundary_state",
+               "_refresh_fields", "_refresh_walls", "_rebalance", "_reset_halo"}
+    searching = {"exchange", "refresh_halo", "_ghosts", "_neighbours", "_exchange",
+                 "_refresh_walls", "_boundary_rows", "_boundary_state", "make_ghosts",
+                 "bin", "rebalance"}
+    for fn in ast.walk(tree):
+        if not isinstance(fn, ast.FunctionDef) or fn.name in allowed:
+            continue
+        calls = {c.func.attr if isinstance(c.func, ast.Attribute) else getattr(c.func, "id", "")
+                 for c in ast.walk(fn) if isinstance(c, ast.Call)}
+        assert not calls & searching, (fn.name, calls & searching)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from psph.kernels.bundles import DruckerPrager
 from psph.kernels.plasticity import dp_constants, dp_return, softened
 
 E, NU = 20e6, 0.3
@@ -24,7 +25,7 @@ def f_of(s, phi, c):
 
 
 def ret(s, eps=0.0, phi_p=PHI, phi_r=PHI, c_p=C, c_r=C, psi0=0.0, eta=0.0, s_f=0.0):
-    return dp_return(*s, eps, K, G, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+    return dp_return(*s, eps, K, G, DruckerPrager(phi_p, phi_r, c_p, c_r, psi0, eta, s_f))
 
 
 def test_plane_strain_constants_eq16():
@@ -92,7 +93,8 @@ def test_apex_and_tension_states_are_finite_and_not_outside(s):
 
 
 def test_cohesionless_material_at_zero_stress_stays_finite():
-    out = dp_return(0.0, 0.0, 0.0, 10.0, 0.0, K, G, PHI, PHI, 0.0, 0.0, 0.0, 0.0, 0.0)
+    out = dp_return(0.0, 0.0, 0.0, 10.0, 0.0, K, G,
+                    DruckerPrager(PHI, PHI, 0.0, 0.0, 0.0, 0.0, 0.0))
     assert all(math.isfinite(v) for v in out)
     assert out[:4] == pytest.approx((0.0, 0.0, 0.0, 0.0), abs=1e-9)
 
@@ -104,7 +106,7 @@ def test_random_states_never_end_outside():
     for s in rng.normal(0.0, 1e5, (2000, 4)) + np.array([-2e5, -2e5, -2e5, 0.0]):
         s = tuple(float(v) for v in s)
         eps = float(rng.uniform(0, 0.2))
-        out = dp_return(*s, eps, K, G, *law)
+        out = dp_return(*s, eps, K, G, DruckerPrager(*law))
         assert all(math.isfinite(v) for v in out) and out[5] >= 0.0
         phi0, c0, _ = softened(eps, *law)
         phi1, c1, _ = softened(eps + out[5], *law)
@@ -146,7 +148,7 @@ def test_tension_cutoff_moves_the_mean_stress_and_keeps_the_deviator():
     s = (6e3, 4e3, 5e3, 0.5e3)
     assert f_of(s, PHI, C) < 0
     assert ret(s)[:5] == (*s, 0.0)
-    out = dp_return(*s, 0.0, K, G, PHI, PHI, C, C, 0.0, 0.0, 0.0, 1e3)
+    out = dp_return(*s, 0.0, K, G, DruckerPrager(PHI, PHI, C, C, 0.0, 0.0, 0.0, 1e3))
     assert sum(out[:3]) / 3 == pytest.approx(1e3, rel=1e-12)
     assert np.allclose(np.subtract(out[:3], 1e3), np.subtract(s[:3], 5e3), atol=1e-9)
     assert out[3] == s[3] and out[5] == 0.0 and out[6] == 0.0
@@ -163,7 +165,8 @@ def test_tension_cutoff_corner_returns_the_deviator_alone():
     tau = 3 * C
     out = ret((0.0, 0.0, 0.0, tau), psi0=psi)
     assert sum(out[:3]) > 0.0  # without a cut-off the return goes into tension
-    cut = dp_return(0.0, 0.0, 0.0, tau, 0.0, K, G, PHI, PHI, C, C, psi, 0.0, 0.0, 0.0)
+    cut = dp_return(0.0, 0.0, 0.0, tau, 0.0, K, G,
+                    DruckerPrager(PHI, PHI, C, C, psi, 0.0, 0.0, 0.0))
     kap = dp_constants(PHI, C)[1]
     assert cut[:3] == (0.0, 0.0, 0.0)
     assert cut[3] == pytest.approx(kap, rel=1e-12)
@@ -226,15 +229,16 @@ PAPER_LAW_RETURNS = [
 
 @pytest.mark.parametrize("trial, eps_p, before", PAPER_LAW_RETURNS)
 def test_unset_tension_cutoff_returns_the_paper_law_bit_for_bit(trial, eps_p, before):
-    """tension = inf (an unset `tension_cutoff`) and the argument left out (as
-    `verify/softening_band.py` calls it) give the returns of the kernel before the cut-off
-    was added, bit for bit (the sign of a zero too): elastic, cone and apex states with
-    softening."""
+    """tension = inf (an unset `tension_cutoff`) and the tension left at its default (as
+    `bench/studies/softening_band.py` sets the law) give the returns of the kernel before
+    the cut-off was added, bit for bit (the sign of a zero too): elastic, cone and apex
+    states with softening."""
     law = (PHI, math.radians(20.0), C, 1e3, math.radians(-5.0), 5.0, 0.5)
     bits = np.array(before).view(np.int64)
-    assert (np.array(dp_return(*trial, eps_p, K, G, *law, math.inf)).view(np.int64)
+    assert (np.array(dp_return(*trial, eps_p, K, G, DruckerPrager(*law, math.inf)))
+            .view(np.int64) == bits).all()
+    assert (np.array(dp_return(*trial, eps_p, K, G, DruckerPrager(*law))).view(np.int64)
             == bits).all()
-    assert (np.array(dp_return(*trial, eps_p, K, G, *law)).view(np.int64) == bits).all()
 
 
 def test_tension_cutoff_reaches_the_material_table():
@@ -268,24 +272,21 @@ def test_dilation_decays_with_its_own_strain():
     and c, as a regularised eps_hat clipped to 0) and eps_dilation = 10, the return is
     that of psi_0 exp(-s_f 10) without decay; eps_dilation = eps_p gives the default's
     bits; a contractive state's volume change (d_lambda 3 xi_psi) shrinks with it."""
-    law = dict(phi_p=PHI, phi_r=math.radians(20.0), c_p=C, c_r=1e3, eta=5.0)
     psi0, s_f = math.radians(-5.0), 0.5
+    law = DruckerPrager(phi_p=PHI, phi_r=math.radians(20.0), c_p=C, c_r=1e3, psi0=psi0,
+                        eta=5.0, s_f=s_f)
     s = (-20e3, -120e3, -60e3, 45e3)
-    own = dp_return(*s, 0.0, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
-                    law["eta"], s_f, math.inf, 10.0)
-    decayed = dp_return(*s, 0.0, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"],
-                        psi0 * math.exp(-s_f * 10.0), law["eta"], 0.0)
+    own = dp_return(*s, 0.0, K, G, law, 10.0)
+    decayed = dp_return(*s, 0.0, K, G,
+                        law._replace(psi0=psi0 * math.exp(-s_f * 10.0), s_f=0.0))
     assert own[4] > 0.0
     assert np.allclose(own, decayed, rtol=1e-12, atol=1e-9)
-    peak = dp_return(*s, 0.0, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
-                     law["eta"], s_f)
+    peak = dp_return(*s, 0.0, K, G, law)
     mean = [sum(r[:3]) for r in (s, own, peak)]
     assert mean[2] - mean[0] > 100.0 * abs(mean[1] - mean[0])  # psi_0 contracts, ~0 not
     for eps in (0.0, 0.3, 2.0):
-        a = dp_return(*s, eps, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
-                      law["eta"], s_f, math.inf, eps)
-        b = dp_return(*s, eps, K, G, law["phi_p"], law["phi_r"], law["c_p"], law["c_r"], psi0,
-                      law["eta"], s_f)
+        a = dp_return(*s, eps, K, G, law, eps)
+        b = dp_return(*s, eps, K, G, law)
         assert np.array_equal(np.array(a).view(np.int64), np.array(b).view(np.int64))
 
 
@@ -299,15 +300,15 @@ def test_return_in_3d_is_isotropic_and_plane_strain_is_its_case():
     voigt = [[0, 3, 5], [3, 1, 4], [5, 4, 2]]  # xx yy zz xy yz zx
     phi_p, phi_r, c_p, c_r = math.radians(30.0), math.radians(20.0), 5e3, 1e3
     psi0, eta, s_f = math.radians(-5.0), 5.0, 2.0
-    args = (0.0, K, G, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
+    args = (K, G, DruckerPrager(phi_p, phi_r, c_p, c_r, psi0, eta, s_f))
     for _ in range(40):
         trial = rng.normal(size=6) * 40e3 - [20e3, 20e3, 20e3, 0, 0, 0]
         eps = rng.uniform(0.0, 0.3)
         a = np.asarray(trial)[voigt]
         q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
         b = q @ a @ q.T
-        rb = dp_return_3d(b[0, 0], b[1, 1], b[2, 2], b[0, 1], b[1, 2], b[2, 0], eps, *args[1:])
-        ra = dp_return_3d(*trial, eps, *args[1:])
+        rb = dp_return_3d(b[0, 0], b[1, 1], b[2, 2], b[0, 1], b[1, 2], b[2, 0], eps, *args)
+        ra = dp_return_3d(*trial, eps, *args)
         ret_a = np.asarray(ra[:6])[voigt]
         ret_b = np.asarray(rb[:6])[voigt]
         assert np.allclose(q @ ret_a @ q.T, ret_b, rtol=1e-9, atol=1e-6)
@@ -317,6 +318,6 @@ def test_return_in_3d_is_isotropic_and_plane_strain_is_its_case():
         dev = ret_a - np.trace(ret_a) / 3.0 * np.eye(3)
         f = xi * np.trace(ret_a) + np.sqrt(0.5 * np.sum(dev * dev)) - kap
         assert f <= 1e-6 * kap
-        plane = dp_return(trial[0], trial[1], trial[2], trial[3], eps, *args[1:])
-        r3 = dp_return_3d(trial[0], trial[1], trial[2], trial[3], 0.0, 0.0, eps, *args[1:])
+        plane = dp_return(trial[0], trial[1], trial[2], trial[3], eps, *args)
+        r3 = dp_return_3d(trial[0], trial[1], trial[2], trial[3], 0.0, 0.0, eps, *args)
         assert plane == (r3[0], r3[1], r3[2], r3[3], r3[6], r3[7], r3[8])

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from psph.kernels.bundles import DruckerPrager
 from psph.kernels.plasticity import dp_return
 from psph.verify.porosity import porosity_bound, porosity_deficit
 
@@ -29,14 +30,15 @@ def test_the_bound_is_the_compaction_the_return_mapping_makes():
     shear = E / (2 * (1 + nu))
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))
     bulk = lam + 2 * shear / 3
-    dp = (math.radians(10.0), math.radians(5.0), 55e3, 0.7e3, math.radians(-5.0), 5.0, 0.5)
+    dp = DruckerPrager(math.radians(10.0), math.radians(5.0), 55e3, 0.7e3, math.radians(-5.0),
+                       5.0, 0.5)
     s = np.array([-100e3, -100e3, -100e3, 0.0])
     eps_p = ev_p = 0.0
     d_gamma = 2e-4  # engineering shear strain per step
     for _ in range(20000):
         trial = s.copy()
         trial[3] += shear * d_gamma
-        r = dp_return(*trial, eps_p, bulk, shear, *dp)
+        r = dp_return(*trial, eps_p, bulk, shear, dp)
         s = np.array(r[:4])
         ev_p -= (s[:3].sum() - trial[:3].sum()) / (3 * bulk)
         eps_p += r[5]

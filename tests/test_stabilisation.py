@@ -6,6 +6,8 @@ import math
 import numpy as np
 import pytest
 
+from psph.kernels.bundles import CellList, PorosityFields
+from psph.kernels.neighbours import cell_lists_indexed
 from psph.kernels.shepard import mls_stress, shepard_pressure, shepard_stress
 from psph.kernels.update import (
     porosity_follows_pressure_filter,
@@ -13,7 +15,7 @@ from psph.kernels.update import (
     tpi_pressure,
 )
 from psph.physics.material import material_row
-from tests.helpers import cell_lists, jittered_lattice
+from tests.helpers import jittered_lattice
 
 
 @pytest.mark.parametrize("p_i", [3.0e3, 1.0, 0.0])
@@ -75,12 +77,12 @@ def test_eq47_suction_does_not_depend_on_the_step(tmp_path):
 
 def _filtered(x, p, h, n_owned=None, drained=None, t=0.0):
     n = len(x)
-    cell_start, order, ncell = cell_lists(x, h)
+    cells = CellList(*cell_lists_indexed(x, h))
     q = p.copy()
     q_prev = p - 1.0  # a uniform TPI increment of 1 Pa per step
     drained = np.full(n, math.inf) if drained is None else drained
     shepard_pressure(n, n if n_owned is None else n_owned, x, q, q_prev, np.full(n, 1e-4),
-                     drained, t, cell_start, order, ncell, h, np.zeros((n, 2)))
+                     drained, t, cells, h, np.zeros((n, 2)))
     assert np.allclose(q - q_prev, 1.0, rtol=0, atol=1e-9 * max(1.0, np.abs(p).max()))
     return q
 
@@ -143,10 +145,9 @@ def _checkerboard_stress(n, dx):
 
 def _filtered_stress(x, stress, h):
     n = len(x)
-    cell_start, order, ncell = cell_lists(x, h)
+    cells = CellList(*cell_lists_indexed(x, h))
     out = stress.copy()
-    shepard_stress(n, n, x, out, np.full(n, 1e-4), cell_start, order, ncell, h,
-                   np.zeros((n, 5)))
+    shepard_stress(n, n, x, out, np.full(n, 1e-4), cells, h, np.zeros((n, 5)))
     return out
 
 
@@ -177,9 +178,9 @@ def test_stress_regularisation_removes_the_odd_even_mode():
 
 def _mls_filtered(x, stress, h):
     n = len(x)
-    cell_start, order, ncell = cell_lists(x, h)
+    cells = CellList(*cell_lists_indexed(x, h))
     out = stress.copy()
-    mls_stress(n, n, x, out, np.full(n, 1e-4), cell_start, order, ncell, h, np.zeros((n, 18)))
+    mls_stress(n, n, x, out, np.full(n, 1e-4), cells, h, np.zeros((n, 18)))
     return out
 
 
@@ -214,11 +215,11 @@ def _filter_with_porosity(x, stress, poro, bulk3, h):
     n = len(x)
     out, n_new = stress.copy(), poro.copy()
     trace = out[:, :3].sum(axis=1)
-    cell_start, order, ncell = cell_lists(x, h)
-    mls_stress(n, n, x, out, np.full(n, 1e-4), cell_start, order, ncell, h, np.zeros((n, 18)))
+    mls_stress(n, n, x, out, np.full(n, 1e-4), CellList(*cell_lists_indexed(x, h)), h,
+               np.zeros((n, 18)))
     vol = np.full(n, 1e-4)
-    porosity_follows_stress_filter(n, trace, out, n_new, np.full(n, 0.4), vol, np.full(n, 1e-4),
-                                   np.zeros(n), np.zeros(n), 1000.0,
+    f = PorosityFields(n_new, np.full(n, 0.4), vol, np.full(n, 1e-4), np.zeros(n), np.zeros(n))
+    porosity_follows_stress_filter(n, trace, out, f, 1000.0,
                                    material_row(rho_s=2650.0, k=5e-8, bulk3=bulk3), np.zeros(n))
     return out, n_new, vol
 
@@ -260,15 +261,16 @@ def test_pressure_filter_moves_the_porosity_with_the_strain_it_erases():
     x = jittered_lattice(n_side, dx, 0.1)
     n = len(x)
     h = 1.2 * dx
-    cell_start, order, ncell = cell_lists(x, h)
+    cells = CellList(*cell_lists_indexed(x, h))
 
     def filtered(p, poro):
         p, poro, vol = p.copy(), poro.copy(), np.full(n, 1e-4)
         before = p.copy()
-        shepard_pressure(n, n, x, p, p.copy(), vol.copy(), np.full(n, np.inf), 0.0,
-                         cell_start, order, ncell, h, np.zeros((n, 2)))
-        porosity_follows_pressure_filter(n, before, p, poro, np.full(n, n0), vol,
-                                         np.full(n, 1e-4), np.zeros(n), np.zeros(n), 1000.0,
+        shepard_pressure(n, n, x, p, p.copy(), vol.copy(), np.full(n, np.inf), 0.0, cells, h,
+                         np.zeros((n, 2)))
+        f = PorosityFields(poro, np.full(n, n0), vol, np.full(n, 1e-4), np.zeros(n),
+                           np.zeros(n))
+        porosity_follows_pressure_filter(n, before, p, f, 1000.0,
                                          material_row(rho_s=2650.0, k=5e-8), np.zeros(n), k_l)
         return p, poro, vol
 

@@ -10,6 +10,7 @@ import pytest
 from psph.geometry.surfaces import surface_particles
 from psph.kernels.boundary import MOTION_FIXED, MOTION_FRICTION, MOTION_SLIP
 from psph.kernels.boundary_3d import boundary_state_3d
+from psph.kernels.bundles import BoundaryPoints, BoundaryRows, CellList, WallFields
 from psph.kernels.neighbours import cell_lists_indexed
 from psph.kernels.spline import dw_cubic, w_cubic
 from tests.helpers import assert_bad_input
@@ -100,10 +101,12 @@ def _state(motion, soil, bx, bn, v_soil, stress_soil, tan_phi=0.0, rho=2000.0, g
     p[:ns] = p_soil
     z = np.zeros
     foot = np.zeros((nb, 3))  # the floor z = 0 (the cube's tests use no friction)
-    boundary_state_3d(ns, ns, nb, np.arange(nb), np.full(nb, motion), np.full(nb, tan_phi),
-                      np.full(nb, drained), bn, foot, x, v, z((n, 3)), stress, p, p.copy(),
-                      np.full(n, 0.4), np.full(n, rho), np.ones(n), z((n, 3)), z(3),
-                      np.array([0.0, 0.0, -g]), cell_of, cell_start, order, ncell, H)
+    pts = BoundaryPoints(np.full(nb, motion), np.full(nb, tan_phi), np.full(nb, drained),
+                         bn, foot, z(nb), z(nb))
+    f = WallFields(x, v, z((n, 3)), stress, p, p.copy(), np.full(n, 0.4), z(n),
+                   np.full(n, rho), np.ones(n), z((n, 3)), z(n))
+    boundary_state_3d(ns, BoundaryRows(ns, nb, np.arange(nb)), pts, f, z(3),
+                      np.array([0.0, 0.0, -g]), CellList(cell_of, cell_start, order, ncell), H)
     if p_out is not None:
         p_out[:] = p[ns:]
     return v[ns:], stress[ns:]

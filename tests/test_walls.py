@@ -4,6 +4,7 @@ feign stretching along itself (`interactions.py`, the Gs columns)."""
 import numpy as np
 import pytest
 
+from psph.kernels.bundles import GhostSources, WallFields, Walls
 from psph.kernels.ghosts import make_ghosts
 from psph.kernels.sum_columns import GN, GS, GV, GV_XY
 from tests.helpers import inverse_moment, sums_for
@@ -29,10 +30,11 @@ def _block_on_wall(fixed: bool, velocity: tuple[float, float]):
     stress, p, p_prev = z((cap, 4)), z(cap), z(cap)
     poro, vol = np.full(cap, 0.4), np.full(cap, DX * DX)
     rho, perm, acc, key = np.ones(cap), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float)
-    ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([0.0]),
-                     np.array([1.0]), np.array([fixed]), np.array([False]), x, v, v_slip,
-                     stress, p, p_prev, poro, vol, rho, perm, acc, key, np.zeros(2),
-                     np.zeros(2), np.zeros(cap, np.int64), np.ones(cap))
+    walls = Walls(np.array([1]), np.array([0.0]), np.array([1.0]), np.array([fixed]),
+                  np.array([False]))
+    f = WallFields(x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key)
+    ng = make_ghosts(n, cap, 2.0 * H, float(cap), walls, f, np.zeros(2), np.zeros(2),
+                     GhostSources(np.zeros(cap, np.int64), np.ones(cap)))
     assert ng > 0
     m = n + ng
     sums = sums_for(x[:m], H, vol[:m], v=v[:m], poro=poro[:m], n_owned=n, v_slip=v_slip[:m],
@@ -102,11 +104,13 @@ def test_ghosts_continue_a_geostatic_stress_linearly(drained):
     stress[:n, 0] = stress[:n, 2] = 0.5 * stress[:n, 1]
     stress[:n, 3] = 10.0 * y
     src, sign = np.zeros(cap, np.int64), np.ones(cap)
-    ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([0.0]),
-                     np.array([1.0]), np.array([True]), np.array([drained]), x, z((cap, 2)),
-                     z((cap, 2)), stress, p, p.copy(), np.full(cap, 0.4), np.ones(cap),
-                     np.full(cap, rho), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float),
-                     np.array([0.0, -rho_l * g]), np.array([0.0, -g]), src, sign)
+    walls = Walls(np.array([1]), np.array([0.0]), np.array([1.0]), np.array([True]),
+                  np.array([drained]))
+    f = WallFields(x, z((cap, 2)), z((cap, 2)), stress, p, p.copy(), np.full(cap, 0.4),
+                   np.ones(cap), np.full(cap, rho), np.ones(cap), z((cap, 2)),
+                   np.arange(cap, dtype=float))
+    ng = make_ghosts(n, cap, 2.0 * H, float(cap), walls, f, np.array([0.0, -rho_l * g]),
+                     np.array([0.0, -g]), GhostSources(src, sign))
     gh = np.arange(n, n + ng)
     assert ng == 12 and np.all(x[gh, 1] < 0.0)  # the rows within 2h = 2.6 dx
     yg = x[gh, 1]
@@ -133,11 +137,13 @@ def test_a_lid_takes_no_weight():
     stress[:n, 0] = stress[:n, 2] = 0.5 * stress[:n, 1]
     src, sign = np.zeros(cap, np.int64), np.ones(cap)
     p = z(cap)
-    ng = make_ghosts(n, cap, 2.0 * H, float(cap), np.array([1]), np.array([1.0]),
-                     np.array([-1.0]), np.array([True]), np.array([False]), x, z((cap, 2)),
-                     z((cap, 2)), stress, p, p.copy(), np.full(cap, 0.4), np.ones(cap),
-                     np.full(cap, rho), np.ones(cap), z((cap, 2)), np.arange(cap, dtype=float),
-                     np.zeros(2), np.array([0.0, -g]), src, sign)
+    walls = Walls(np.array([1]), np.array([1.0]), np.array([-1.0]), np.array([True]),
+                  np.array([False]))
+    f = WallFields(x, z((cap, 2)), z((cap, 2)), stress, p, p.copy(), np.full(cap, 0.4),
+                   np.ones(cap), np.full(cap, rho), np.ones(cap), z((cap, 2)),
+                   np.arange(cap, dtype=float))
+    ng = make_ghosts(n, cap, 2.0 * H, float(cap), walls, f, np.zeros(2), np.array([0.0, -g]),
+                     GhostSources(src, sign))
     gh = np.arange(n, n + ng)
     assert ng > 0 and np.all(x[gh, 1] > 1.0)
     assert np.array_equal(stress[gh, :3], stress[src[gh], :3])

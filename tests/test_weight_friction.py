@@ -6,6 +6,7 @@ Drucker-Prager apex, docs/vv/collapse_3d.md). In a run: `tests/test_three_d.py`,
 import numpy as np
 
 from psph.kernels.boundary import boundary_contact
+from psph.kernels.bundles import BoundaryPoints, BoundaryRows, ContactFields, ContactGrid
 from psph.kernels.neighbours import bin_particles, grid_bounds
 
 DX = 0.05
@@ -35,10 +36,13 @@ def _contact(x, v, weight_dv, stress=None, rho_water=0.0):
     foot = bx.copy()
     foot[:, -1] = 0.0
     vv = np.vstack([v, np.zeros_like(v)])
-    boundary_contact(n, allx, vv, np.zeros_like(allx), n, n, np.arange(n), normal, foot,
-                     origin, cell, lo, ncell, cell_start, order, H, np.full(n, weight_dv),
-                     DX, _stress(stress, n, dim), np.full(2 * n, RHO),
-                     np.full(n, 0.5 * 9.81 * DX), rho_water)
+    f = ContactFields(allx, vv, np.zeros_like(allx), _stress(stress, n, dim),
+                      np.full(2 * n, RHO))
+    z = np.zeros
+    pts = BoundaryPoints(z(n, np.int64), z(n), z(n, np.bool_), normal, foot,
+                         np.full(n, weight_dv), np.full(n, 0.5 * 9.81 * DX))
+    boundary_contact(n, f, BoundaryRows(n, n, np.arange(n)), pts,
+                     ContactGrid(origin, lo, ncell, cell_start, order), cell, H, DX, rho_water)
     return allx[:n], vv[:n]
 
 

@@ -54,7 +54,7 @@ def check_scene(scene):
     for il, layer in enumerate(pa.layers):
         if dim == 2:
             check_layer_profiles(layer, f"particles.layers[{il}]")
-        else:  # elevation grids, with data over every lattice column (issue 38)
+        else:  # elevation grids, with data over every lattice column
             axes = lattice_axes(lo, hi, scene.particles.dx)
             check_layer_grids(layer, f"particles.layers[{il}]", axes[0], axes[1])
     for ip, poly in enumerate(pa.polygons):
@@ -292,7 +292,7 @@ def check_cryer(scene) -> None:
 
 def check_integrator(scene) -> None:
     """The projection's default integrator is the symplectic one, the others' the one-sweep
-    step; the one-sweep step with the projection is refused (issue 39: forward Euler for
+    step; the one-sweep step with the projection is refused (forward Euler for
     the skeleton, which the projection's undamped undrained mode does not absorb)."""
     if scene.time.integrator is None:
         scene.time.integrator = "symplectic" if scene.pressure.scheme == "projection" \

@@ -89,7 +89,7 @@ class MeshGeometry(_Model):
 
 
 class Layer(_Model):
-    """Soil between two ground profiles of a cross-section (issue 16): the domain lattice
+    """Soil between two ground profiles of a cross-section: the domain lattice
     points with bottom(x) <= z <= top(x). Each profile is [[x, z], ...] strictly
     increasing in x, or the path of a CSV file of x, z rows (psph/geometry/profiles.py)."""
 
@@ -157,7 +157,7 @@ class Pressure(_Model):
     explicit_until: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Time until which TPI scenes run explicit Eq. (25) (the loading "
         "stage) [s]")
-    # see README
+    # the relative acceleration of the water, Eq. (36); off in the paper's runs
     acceleration_term: bool = Field(False, description="Include div(k dv/dt)/g of "
                                     "Eq. (25)/(36)")
     # true: ponding, Section 4.4; "drained": atmospheric, no suction either
@@ -180,8 +180,7 @@ class Pressure(_Model):
     drained_boundary: Literal["mirror", "layer"] = Field(
         "mirror", description="Where a drained side holds p = 0: \"mirror\" (its true "
         "surface) or \"layer\" (outer particle layer, dx/2 inside)")
-    # the differences were tried for issue 13 cause 12 and are unstable at free corners
-    # (README)
+    # the difference forms are unstable at free corners: experimental only
     momentum: Literal["pair", "difference", "gradient", "closure"] = Field(
         "pair", description="Pore-pressure term of Eq. (26): \"pair\" (paper) or the "
         "experimental \"difference\", \"gradient\", \"closure\"; explicit/TPI only")
@@ -196,7 +195,7 @@ class Time(_Model):
     allow_dt_above_solid_limit: bool = Field(
         False, description="Allow time.dt above Eq. (41) and the explicit scheme's "
         "undrained limit")
-    # the one-sweep step has no stable step with the projection (issue 39)
+    # the one-sweep step has no stable step with the projection
     integrator: Literal["euler", "symplectic"] | None = Field(
         None, description="\"euler\" (one pair sweep) or \"symplectic\" (kick, then a "
         "velocity sweep, Eq. 27); default \"symplectic\" with the projection (which "
@@ -214,32 +213,32 @@ class Stabilisation(_Model):
     av_sound_speed: Literal["solid", "undrained"] = Field(
         "solid", description="Sound speed of the viscosity: \"solid\" sqrt(E/ρ_s) of Eq. (41) "
         "or \"undrained\" (c_sp of Eq. 28)")
-    # README: the corrected shear rate excites a zig-zag mode at free surfaces
+    # the corrected shear rate excites a zig-zag mode at free surfaces: off by default
     corrected_strain_rate: bool = Field(
         False, description="Apply the Eq. (22) correction to the shear rate and spin too")
     shepard_every: Annotated[int, Field(ge=0)] = Field(
         0, description="Steps m between Shepard filters of p, Eq. (46), and of σ' with "
         "shepard_stress (a dry scene filters σ' only); 0 is off")
-    # psph/kernels/shifting.py; issue 13, cause 12
+    # psph/kernels/shifting.py
     shifting: Annotated[float, Field(ge=0.0)] = Field(
         0.0, description="Particle-shifting coefficient A of D = A h^2 |grad v| dt; 0 is "
         "off [-]")
     # stress regularisation, the paper's ref. [14]: the odd-even mode of sigma' has no other
-    # damping (issue 13)
+    # damping
     shepard_stress: bool = Field(
         False, description="Also filter the effective stress in the Shepard step")
     # "mls" keeps linear stress fields, also at free surfaces (ref. [14])
     stress_filter: Literal["shepard", "mls"] = Field(
         "shepard", description="Kernel of the stress filter: \"shepard\" (zeroth order, "
         "Eq. 46) or \"mls\" (first order)")
-    # so that sigma' and n of Eq. (24) carry the same strain (issue 13: without it a
+    # so that sigma' and n of Eq. (24) carry the same strain (without it a
     # debris-front particle compacted to n = 0.021 while the filter erased the stress that
     # resisted it)
     stress_filter_porosity: bool = Field(
         True, description="Move the porosity by the elastic volumetric strain the stress "
         "filter removes")
     # as if the filter were a strain and not an exchange of pore water between neighbours.
-    # A tried variant (issue 13, README cause 12), off: with ponding it is a ratchet at the
+    # Off: with ponding it is a ratchet at the
     # free surface (the filter raises a surface particle's p and compacts it, the clip
     # p <= 0 removes the p and keeps the compaction): K0 = 0.5 at 40 s, 365 particles below
     # the flow rule's porosity bound against 83 without it
@@ -302,7 +301,7 @@ class Initial(_Model):
 
     # a level (elevation y): p = rho_l |g| (y_wt - y) below it; "surface": the water table
     # follows the ground surface (p = rho_l |g| depth below the top of each column); a
-    # phreatic profile (issue 16): z_w(x) linear between its points and held at its end
+    # phreatic profile: z_w(x) linear between its points and held at its end
     # values beyond them; p = 0 above it
     water_table: float | Literal["surface"] | list[Vec2] | str | None = Field(
         None, description="Water table: a level, \"surface\", or a phreatic profile "
@@ -331,7 +330,7 @@ class Decomposition(_Model):
         "or, in 3D, \"z\"")
     cuts: Literal["auto", "slabs", "boxes"] = Field(
         "auto", description="\"slabs\" along `axis`; \"boxes\": slabs cut again along the "
-        "particles' next longest side (two axes, issue 38); \"auto\": boxes where their "
+        "particles' next longest side (two axes); \"auto\": boxes where their "
         "busiest rank holds less halo than the slabs' (4 or more ranks)")
     rebalance_every: Annotated[int, Field(ge=0)] = Field(
         200, description="Steps between imbalance checks; 0 is never (the slabs stay as "
@@ -368,7 +367,7 @@ class Scene(_Model):
         None, description="The single material (index 0); give it or [[materials]], not "
         "both")
     materials: list[NamedMaterial] = Field(
-        [], description="Several named materials (issue 16), picked by each source's "
+        [], description="Several named materials, picked by each source's "
         "`material`")
     boundaries: Boundaries = Field(Boundaries(), description="The four box sides and the "
                                    "polyline boundaries")

@@ -1,5 +1,5 @@
-"""Boundary particles of rigid polylines (issue 16): their state each step, and the
-no-penetration safety net (2D and 3D).
+"""Boundary particles of rigid polylines: their state each step, and the no-penetration
+safety net (2D and 3D).
 
 The state follows the generalized wall boundary condition of Adami, Hu & Adams (2012,
 J. Comput. Phys. 231, 7057), with the conventions of the plane mirror ghosts
@@ -31,6 +31,10 @@ particles j (rows < n_real) within 2h, with W_bj of Eq. (21):
 
 A boundary particle without soil within 2h interacts with no soil either; it gets v = 0,
 p = 0, sigma' = 0.
+
+The kernels take their arrays in bundles (`bundles.py`): the store's rows of boundary
+particles (`BoundaryRows`), the scene's boundary particles (`BoundaryPoints`), the fields
+(`WallFields`, `ContactFields`) and the cell lists (`CellList`, `ContactGrid`).
 """
 
 import math
@@ -53,16 +57,39 @@ def _shear_frame(n0, n1):
 
 
 @nb.njit(cache=True)
-def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x, v, v_slip,
-                   stress, p, p_prev, poro, rho, perm, acc, head_b, cell_of, cell_start,
-                   order, ncell, h):
-    """State of the boundary rows first..first+n_b-1 (see the module docstring); src[r]
-    is the polyline boundary particle of row first + r, whose polyline has `motion`,
-    `tan_phi` and `drained` (per boundary particle) and its soil normal `normal`. Also
-    copies v into v_slip on rows 0..n_real-1. The neighbour loop visits the 3 x 3 cells
-    around each boundary particle in a fixed order and a cell's particles in key order
-    (`neighbours.py`): the sums are the same on any number of ranks as long as every soil
-    particle within 2h of the boundary particle is a real row (halo of 4h)."""
+def boundary_state(n_real, rows, pts, f, head_b, cells, h):
+    """State of the boundary rows (see the module docstring), and v copied into v_slip on
+    the real rows. The neighbour loop visits the 3 x 3 cells around each boundary
+    particle in a fixed order and a cell's particles in key order (`neighbours.py`): the
+    sums are the same on any number of ranks as long as every soil particle within 2h of
+    the boundary particle is a real row (halo of 4h).
+
+    Parameters
+    ----------
+    n_real : int
+        real rows (owned and halo): the soil.
+    rows : bundles.BoundaryRows
+        the boundary rows first..first+n-1; row first + r holds the polyline boundary
+        particle src[r].
+    pts : bundles.BoundaryPoints
+        the polylines' boundary particles: their polyline's motion, tan_phi and drained,
+        and their unit normal into the soil (foot, weight_dv, half_weight unused).
+    f : bundles.WallFields
+        every row's fields (2D); the boundary rows' velocity, v_slip (m/s), effective
+        stress (Pa), p, p_prev (Pa), porosity, density (kg/m^3), conductivity (m/s) and
+        acceleration (m/s^2) are written (vol and key unused).
+    head_b : (2,) float array
+        rho_l times the body force (N/m^3), for the hydrostatic pressure shift.
+    cells : bundles.CellList
+        the step's cell lists of side 2h over every row.
+    h : float
+        smoothing length (m).
+    """
+    first, n_b, src = rows
+    motion, tan_phi, drained, normal = pts.motion, pts.tan_phi, pts.drained, pts.normal
+    x, v, v_slip, stress, p, p_prev = f.x, f.v, f.v_slip, f.stress, f.p, f.p_prev
+    poro, rho, perm, acc = f.poro, f.rho, f.perm, f.acc
+    cell_of, cell_start, order, ncell = cells
     for j in range(n_real):
         v_slip[j, 0] = v[j, 0]
         v_slip[j, 1] = v[j, 1]
@@ -181,14 +208,12 @@ def boundary_state(n_real, first, n_b, src, motion, tan_phi, drained, normal, x,
 
 
 @nb.njit(cache=True)
-def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, cell_size,
-                     grid_lo, ncell, cell_start, order, h, weight_dv, reach, stress, rho,
-                     half_weight, rho_water=0.0):
+def boundary_contact(n_owned, f, rows, pts, grid, cell_size, h, reach, rho_water=0.0):
     """No penetration (safety net): an owned particle found on the wall side of the line
     (in 3D the tangent plane) of its nearest boundary particle (within 2h, in the cell
     lists of this step) is reflected back across it, (x - foot) . n -> -(x - foot) . n,
     and loses its velocity into the wall, as `ghosts.wall_contact` does for planes. 2D
-    or 3D by x (the 2D arithmetic in its own order). Returns the number moved.
+    or 3D by x (the 2D arithmetic in its own order).
 
     The Coulomb friction of a particle's weight (`weight_friction` walls): a particle
     within `reach` of that plane (after the reflection) loses min(|v_t|, s weight_dv[k])
@@ -201,7 +226,43 @@ def boundary_contact(n_owned, x, v, u, first, n_b, src, normal, foot, origin, ce
     (rho_water = rho_l; 0 when dry) both count the buoyant weight, rho - rho_l: the
     effective stress carries it and the Coulomb friction acts on it, the pore pressure
     carries the water's share (a hydrostatic p; above a water table, p = 0, this
-    undercounts); dv is then scaled by (rho - rho_l) / rho."""
+    undercounts); dv is then scaled by (rho - rho_l) / rho.
+
+    Parameters
+    ----------
+    n_owned : int
+        the owned rows, the particles put back.
+    f : bundles.ContactFields
+        every row's positions (m), velocities (m/s) and displacements (m), changed on the
+        owned rows moved, and the effective stress (Pa) and density (kg/m^3) of the
+        weight friction.
+    rows : bundles.BoundaryRows
+        the boundary rows first..first+n-1; row first + r holds the boundary particle
+        src[r].
+    pts : bundles.BoundaryPoints
+        the boundary particles' unit normals into the soil, a point `foot` of their wall
+        (m), weight_dv (m/s) and half_weight (m^2/s^2) of the weight friction (motion,
+        tan_phi, drained unused).
+    grid : bundles.ContactGrid
+        the step's cell lists of side `cell_size` over every row.
+    cell_size : float
+        the cells' side (m, at least 2h).
+    h : float
+        smoothing length (m).
+    reach : float
+        distance from the wall (m) within which a particle has the weight friction.
+    rho_water : float
+        rho_l (kg/m^3) in a saturated scene, 0 in a dry one.
+
+    Returns
+    -------
+    int
+        the number of particles moved.
+    """
+    x, v, u, stress, rho = f
+    first, n_b, src = rows
+    normal, foot, weight_dv, half_weight = pts.normal, pts.foot, pts.weight_dv, pts.half_weight
+    origin, grid_lo, ncell, cell_start, order = grid
     three = x.shape[1] == 3
     ncx = ncell[0]
     ncy = ncell[1]
@@ -310,7 +371,30 @@ def _coulomb_weight(v, i, normal, k, dv):
 @nb.njit(cache=True)
 def near_box(bx, candidates, x, n_real, margin, bbox, out):
     """out[:m] = the candidates k (in their order) whose bx[k] lies within `margin` of
-    the bounding box of x[:n_real] (kept in bbox, (2, dim)); returns m (0 without rows)."""
+    the bounding box of x[:n_real].
+
+    Parameters
+    ----------
+    bx : (m_b, dim) float array
+        the boundary particles' positions (m).
+    candidates : int array
+        the boundary particles to test, in the order kept.
+    x : (cap, dim) float array
+        the store's positions (m).
+    n_real : int
+        rows of x in the box (owned and halo).
+    margin : float
+        how far outside the box a boundary particle may lie (m).
+    bbox : (2, dim) float array
+        receives the box's lower and upper corners (m).
+    out : int array
+        receives the selected boundary particles.
+
+    Returns
+    -------
+    int
+        their number m (0 without rows).
+    """
     dim = x.shape[1]
     if n_real == 0:
         return 0
@@ -336,8 +420,24 @@ def near_box(bx, candidates, x, n_real, margin, bbox, out):
 
 @nb.njit(cache=True)
 def place_rows(first, n_b, src, bx, bkey, cell_volume, x, key, vol):
-    """Positions, sort keys and volumes (dx^dim) of the selected boundary particles src
-    at rows first.. of the store (2D or 3D by bx)."""
+    """Positions, sort keys and volumes of the selected boundary particles at rows
+    first..first+n_b-1 of the store (2D or 3D by bx).
+
+    Parameters
+    ----------
+    first, n_b : int
+        the first row and the number of rows.
+    src : int array
+        src[r]: the boundary particle of row first + r.
+    bx : (m_b, dim) float array
+        the boundary particles' positions (m).
+    bkey : float array
+        their sort keys.
+    cell_volume : float
+        their volume, dx^dim (m^3; m^2 in 2D).
+    x, key, vol : arrays
+        the store's positions (m), keys and volumes, written at the rows.
+    """
     for r in range(n_b):
         k = src[r]
         for d in range(bx.shape[1]):

@@ -1,5 +1,5 @@
-"""Boundary particles of rigid surfaces in 3D (issue 37): their state each step, the 3D
-form of `boundary.py` (polylines in 2D; its `boundary_contact` serves both).
+"""Boundary particles of rigid surfaces in 3D: their state each step, the 3D form of
+`boundary.py` (polylines in 2D; its `boundary_contact` serves both).
 
 As in 2D (Adami, Hu & Adams 2012, with the plane ghosts' conventions), a boundary
 particle b with unit normal n (into the soil) takes the Shepard averages f~_b of the soil
@@ -69,16 +69,43 @@ def _add_row(stress, j, f, a0, a1, a2, a3, a4, a5):
 
 
 @nb.njit(cache=True)
-def boundary_state_3d(n_real, first, n_b, src, motion, tan_phi, drained, normal, foot, x,
-                      v, v_slip, stress, p, p_prev, poro, rho, perm, acc, head_b, body,
-                      cell_of, cell_start, order, ncell, h):
-    """State of the boundary rows first..first+n_b-1 (module docstring); src[r] is the
-    surface boundary particle of row first + r, with its surface's `motion`, `tan_phi`
-    and `drained`, its soil normal `normal` and a point `foot` of its surface. Also
-    copies v into v_slip on rows 0..n_real-1. The 27 cells around a boundary particle
-    are visited in a fixed order and a cell's particles in key order: the sums are the
-    same on any number of ranks while every soil particle within 2h of it is a real row
-    (a halo of 4h)."""
+def boundary_state_3d(n_real, rows, pts, f, head_b, body, cells, h):
+    """State of the boundary rows (module docstring), and v copied into v_slip on the
+    real rows. The 27 cells around a boundary particle are visited in a fixed order and a
+    cell's particles in key order: the sums are the same on any number of ranks while
+    every soil particle within 2h of it is a real row (a halo of 4h).
+
+    Parameters
+    ----------
+    n_real : int
+        real rows (owned and halo): the soil.
+    rows : bundles.BoundaryRows
+        the boundary rows first..first+n-1; row first + r holds the surface boundary
+        particle src[r].
+    pts : bundles.BoundaryPoints
+        the surfaces' boundary particles: their surface's motion, tan_phi and drained,
+        their unit normal into the soil and a point `foot` of their surface (m)
+        (weight_dv, half_weight unused).
+    f : bundles.WallFields
+        every row's fields (3D); the boundary rows' velocity, v_slip (m/s), effective
+        stress (Pa), p, p_prev (Pa), porosity, density (kg/m^3), conductivity (m/s) and
+        acceleration (m/s^2) are written (vol and key unused).
+    head_b : (3,) float array
+        rho_l times the body force (N/m^3), for the hydrostatic pressure shift.
+    body : (3,) float array
+        the body force b (m/s^2), for the weight of the soil between a particle and the
+        boundary particle.
+    cells : bundles.CellList
+        the step's cell lists of side 2h over every row.
+    h : float
+        smoothing length (m).
+    """
+    first, n_b, src = rows
+    motion, tan_phi, drained, normal, foot = (pts.motion, pts.tan_phi, pts.drained,
+                                              pts.normal, pts.foot)
+    x, v, v_slip, stress, p, p_prev = f.x, f.v, f.v_slip, f.stress, f.p, f.p_prev
+    poro, rho, perm, acc = f.poro, f.rho, f.perm, f.acc
+    cell_of, cell_start, order, ncell = cells
     for j in range(n_real):
         for d in range(3):
             v_slip[j, d] = v[j, d]

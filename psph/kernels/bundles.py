@@ -1,10 +1,12 @@
-"""The argument bundles of the step's two large kernels, `interactions.pair_sums` and
-`update.advance`: named tuples of arrays and scalars, which numba passes at no cost (a
-tuple's members are unboxed as separate arguments would be). A caller builds them each
-call from the current arrays (a store that grows replaces its arrays), with the scalars
-coerced to one type, so that one compiled specialisation serves every run.
+"""The argument bundles of the kernels with many arguments (the pair sweep
+`interactions.pair_sums`, the update `update.advance` and the others whose arguments would
+otherwise run past a dozen): named tuples of arrays and scalars, which numba passes at no
+cost (a tuple's members are unboxed as separate arguments would be). A caller builds them
+each call from the current arrays (a store that grows replaces its arrays), with the
+scalars coerced to one type, so that one compiled specialisation serves every run.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -182,3 +184,203 @@ def fields_of(cls, arrays: dict, **extra):
     """
     return cls(**{name: extra[name] if name in extra else arrays[name]
                   for name in cls._fields})
+
+
+class CellList(NamedTuple):
+    """A cell list of `neighbours.bin_particles` with each row's cell: rows
+    order[cell_start[c]:cell_start[c + 1]] lie in cell c of the ncell[0] x ncell[1]
+    (x ncell[2]) grid, and row i in cell cell_of[i]."""
+    cell_of: np.ndarray
+    cell_start: np.ndarray
+    order: np.ndarray
+    ncell: np.ndarray
+
+
+class NonlocalFields(NamedTuple):
+    """The fields of the real rows (owned and halo) that the non-local strain
+    (`nonlocal_strain.nonlocal_strain`) averages over: positions (m), volumes (m^3; m^2
+    in 2D), the local equivalent plastic strain eps_p and each row's material index."""
+    x: np.ndarray
+    vol: np.ndarray
+    eps_p: np.ndarray
+    material: np.ndarray
+
+
+class DruckerPrager(NamedTuple):
+    """One material's Drucker-Prager law for the return mapping
+    (`plasticity.dp_return_3d`): the peak and residual friction angles phi_p, phi_r (rad)
+    and cohesions c_p, c_r (Pa), the initial dilatancy angle psi0 (rad), the softening
+    rates eta (of phi and c) and s_f (of psi) of Eq. (17)-(19); the tension cut-off of
+    the mean effective stress (Pa; inf: none, the apex c cot(phi) of Eq. 14 bounds it);
+    mohr_coulomb: the cone through Mohr-Coulomb at the trial stress's Lode angle instead
+    of Eq. (16)'s plane-strain cone."""
+    phi_p: float
+    phi_r: float
+    c_p: float
+    c_r: float
+    psi0: float
+    eta: float
+    s_f: float
+    tension: float = math.inf
+    mohr_coulomb: bool = False
+
+
+class PorosityFields(NamedTuple):
+    """The fields that follow a particle's porosity (`update.set_porosity`): porosity and
+    initial porosity, volume and initial volume (m^3; m^2 in 2D), mixture density
+    (kg/m^3) and hydraulic conductivity (m/s)."""
+    poro: np.ndarray
+    poro0: np.ndarray
+    vol: np.ndarray
+    vol0: np.ndarray
+    rho: np.ndarray
+    perm: np.ndarray
+
+
+class FluidParams(NamedTuple):
+    """The pore fluid and the body force: rho_l (kg/m^3), gamma_l = rho_l g (N/m^3), the
+    bulk modulus K_l (Pa) and the body force b0, b1[, b2] (m/s^2; b2 in 3D only)."""
+    rho_l: float
+    gamma_l: float
+    bulk_water: float
+    b0: float
+    b1: float
+    b2: float = 0.0
+
+
+class ImageFields(NamedTuple):
+    """The fields the images of the pressure operator read (`images.image_weights`):
+    positions (m), hydraulic conductivity (m/s), mixture density (kg/m^3) and volumes
+    (m^3; m^2 in 2D)."""
+    x: np.ndarray
+    perm: np.ndarray
+    rho: np.ndarray
+    vol: np.ndarray
+
+
+class ImageWeights(NamedTuple):
+    """Where `images.image_weights` writes the operator's weights with the images: per
+    recorded pair the diagonal and off-diagonal weights (w + w*, w - w*), and per row
+    the storage term that the row's own image is added to."""
+    w_diag: np.ndarray
+    w_off: np.ndarray
+    storage: np.ndarray
+
+
+class WallFields(NamedTuple):
+    """The fields of every row (owned, halo, wall ghosts, boundary particles) that the wall
+    ghosts (`ghosts.make_ghosts`) and the boundary particles (`boundary.boundary_state`,
+    `boundary_3d.boundary_state_3d`) take from the soil near them: positions (m),
+    velocities (m/s), the velocities mirrored as on a free-slip wall (m/s), effective
+    stress (Pa), pore pressure now and one step back (Pa), porosity, volume (m^3; m^2 in
+    2D), mixture density (kg/m^3), hydraulic conductivity (m/s), acceleration (m/s^2) and
+    sort key."""
+    x: np.ndarray
+    v: np.ndarray
+    v_slip: np.ndarray
+    stress: np.ndarray
+    p: np.ndarray
+    p_prev: np.ndarray
+    poro: np.ndarray
+    vol: np.ndarray
+    rho: np.ndarray
+    perm: np.ndarray
+    acc: np.ndarray
+    key: np.ndarray
+
+
+class Walls(NamedTuple):
+    """The plane walls x[axis] = pos (m), one entry each: the soil on the side `sign`
+    (+1: larger x[axis]), fixed (no slip) or free-slip, and drained (the pore pressure
+    mirrored antisymmetrically, p = 0 on the plane) at this step."""
+    axis: np.ndarray
+    pos: np.ndarray
+    sign: np.ndarray
+    fixed: np.ndarray
+    drained: np.ndarray
+
+
+class GhostSources(NamedTuple):
+    """Per row g of a wall ghost: src[g], the real row it mirrors, and sign[g], the sign
+    that carries a pressure increment to it (-1 across a drained wall)."""
+    src: np.ndarray
+    sign: np.ndarray
+
+
+class BoundaryRows(NamedTuple):
+    """The store's rows first..first+n-1 of boundary particles: row first + r holds the
+    boundary particle src[r] of the scene."""
+    first: int
+    n: int
+    src: np.ndarray
+
+
+class BoundaryPoints(NamedTuple):
+    """The scene's boundary particles k, each with its wall's motion (`boundary.MOTION_*`),
+    tan(phi_b) of its friction angle, whether it is drained, its unit normal into the soil,
+    a point `foot` of its wall (m), weight_dv = tan(phi_b) g_n dt of the weight friction
+    (m/s; 0: none) and half_weight = g_n dx / 2 (m^2/s^2; times rho, the normal stress in
+    Pa that carries half a particle's weight)."""
+    motion: np.ndarray
+    tan_phi: np.ndarray
+    drained: np.ndarray
+    normal: np.ndarray
+    foot: np.ndarray
+    weight_dv: np.ndarray
+    half_weight: np.ndarray
+
+
+class ContactGrid(NamedTuple):
+    """The cell list that `boundary.boundary_contact` looks a particle's cell up in: the
+    global grid's origin (m) and the first cell `lo` of this rank's grid along each axis,
+    with the cell list of `neighbours.bin_particles` (cell_start, order, ncell)."""
+    origin: np.ndarray
+    lo: np.ndarray
+    ncell: np.ndarray
+    cell_start: np.ndarray
+    order: np.ndarray
+
+
+class ContactFields(NamedTuple):
+    """The fields `boundary.boundary_contact` reads and moves: positions (m), velocities
+    (m/s) and displacements (m), which it changes on the owned rows, and the effective
+    stress (Pa) and mixture density (kg/m^3) of the weight friction."""
+    x: np.ndarray
+    v: np.ndarray
+    u: np.ndarray
+    stress: np.ndarray
+    rho: np.ndarray
+
+
+class ScaledOperator(NamedTuple):
+    """The pressure operator S of the projection (Eq. (29)) on the step's pairs, as
+    `laplacian.apply_scaled` applies it: the pairs (a, b), the coefficients of
+    `laplacian.operator_coefficients` (c_diag, c_off per pair, c_storage per row), the
+    imposed rows (`fixed`) and the Jacobi preconditioner's diagonal."""
+    pairs: np.ndarray
+    c_diag: np.ndarray
+    c_off: np.ndarray
+    c_storage: np.ndarray
+    fixed: np.ndarray
+    diag: np.ndarray
+
+
+class CGWork(NamedTuple):
+    """Scratch vectors of the conjugate gradients (`psph.solver.pcg.PCGWork`): the
+    residual r, the preconditioned residual u, its image w = S u, the search direction d
+    and its image sd."""
+    r: np.ndarray
+    u: np.ndarray
+    w: np.ndarray
+    d: np.ndarray
+    sd: np.ndarray
+
+
+class DotWork(NamedTuple):
+    """Scratch of the correctly rounded inner products, in the argument order of
+    `exact_sum.chunked_dot`: row, terms and acc of its chunk accumulators, partials of
+    `exact_sum.exact_dot`."""
+    row: np.ndarray
+    terms: np.ndarray
+    acc: np.ndarray
+    partials: np.ndarray

@@ -9,9 +9,9 @@ component reversed on a free-slip wall, kept on a fixed one so that the wall res
 tangential motion), except for its wall-normal component (below); porosity, volume,
 density and permeability copied; pore pressure copied plus the hydrostatic difference
 rho_l b.(x_ghost - x_real), so that the total head p + psi of Eq. (25) is mirrored and a
-wall is impermeable also under gravity; on a drained wall (`wall_drained`) the pore
+wall is impermeable also under gravity; on a drained wall (`Walls.drained`) the pore
 pressure is mirrored antisymmetrically, p_ghost = -p_real, so that p = 0 on the wall
-plane itself (issue 14, item 3; `images.py`).
+plane itself (as across the drained planes of `images.py`).
 Particles near two walls of different axes also get a corner ghost mirrored across both,
 and in 3D, near three, one mirrored across all three.
 
@@ -27,15 +27,19 @@ with the ghost's own p. A plain mirror (sigma'_nn copied) puts a kink in it at t
 the bottom row of a column at rest then lacks (rho - rho_l) g dx of support, sinks by
 2.7 m/s^2 at t = 0, and the column settles into the lattice's odd-even (zig-zag) mode of
 sigma', which the pair-symmetric Eq. (26) cannot see and so never damps (1.5 % of the base
-stress in a column of one density; issue 16, `bench/diagnostics/oddeven_stress_mode.py`).
+stress in a column of one density; `bench/diagnostics/oddeven_stress_mode.py`).
+
+The kernels take the fields as a `bundles.WallFields` and the walls as a `bundles.Walls`.
 """
 
 import numba as nb
 
 
 @nb.njit(cache=True)
-def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev, poro, vol,
-            rho, perm, acc, key, head_b, body):
+def _mirror(src, dst, axis, pos, fixed, drained, f, head_b, body):
+    """Row dst of the fields f (`bundles.WallFields`) = the mirror image of row src across
+    the wall x[axis] = pos (fixed: no slip; drained: p antisymmetric); module docstring."""
+    x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key = f
     three = x.shape[1] == 3
     x[dst, 0] = x[src, 0]
     x[dst, 1] = x[src, 1]
@@ -83,23 +87,51 @@ def _mirror(src, dst, axis, pos, fixed, drained, x, v, v_slip, stress, p, p_prev
 
 
 @nb.njit(cache=True)
-def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, wall_fixed,
-                wall_drained, x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key,
-                head_b, body, src, src_sign):
-    """Write ghosts of particles 0..n_real-1 at n_real, n_real+1, ...; return their number,
-    or -1 if `cap` rows are not enough. Ghost keys are key + key_stride * (1 + code), unique
-    per wall / edge / corner, so the neighbour order is the same on any number of ranks.
-    head_b: rho_l times the body force (N/m^3), for the hydrostatic pressure shift (zero
-    in a scene without pore pressure); body: the body force b (m/s^2), for the weight
-    between a particle and its ghost in the wall-normal stress.
-    v_slip: rows 0..n_real-1 get v; ghosts get the free-slip mirror (v itself may be
-    passed when no wall is fixed).
-    src: src[g] = the real row a ghost g mirrors (corner ghosts too), for fields that are
-    mirrored again later (the search direction of the pressure solve), and src_sign[g]
-    the sign that carries a pressure increment to it (-1 across a drained wall).
-    wall_drained[w]: the wall's pore pressure is mirrored antisymmetrically (p = 0 on it).
-    2D or 3D by x: near two walls of different axes a particle also gets the ghost
-    mirrored across both (an edge), near three (3D) the one across all three (a corner)."""
+def make_ghosts(n_real, cap, reach, key_stride, walls, f, head_b, body, ghosts):
+    """Write the wall ghosts of the real rows 0..n_real-1 at rows n_real, n_real+1, ...
+    (module docstring). 2D or 3D by f.x: near two walls of different axes a particle also
+    gets the ghost mirrored across both (an edge), near three (3D) the one across all
+    three (a corner).
+
+    Parameters
+    ----------
+    n_real : int
+        real rows (owned and halo).
+    cap : int
+        rows of the arrays.
+    reach : float
+        depth of the ghost layer (m, 2h): the particles within it of a wall are mirrored.
+    key_stride : float
+        at least the number of particle ids: a ghost's key is key + key_stride * (1 +
+        code), the code unique per wall, edge and corner, so that the neighbour order is
+        the same on any number of ranks.
+    walls : bundles.Walls
+        the plane walls; walls.drained[w]: the wall's pore pressure is mirrored
+        antisymmetrically (p = 0 on it).
+    f : bundles.WallFields
+        every row's fields; the ghosts' rows are written. f.v_slip: rows 0..n_real-1 get
+        v, the ghosts its free-slip mirror (f.v itself may be passed when no wall is
+        fixed).
+    head_b : (dim,) float array
+        rho_l times the body force (N/m^3), for the hydrostatic pressure shift (zero in a
+        scene without pore pressure).
+    body : (dim,) float array
+        the body force b (m/s^2), for the weight between a particle and its ghost in the
+        wall-normal stress.
+    ghosts : bundles.GhostSources
+        written for each ghost g: src[g], the real row it mirrors (corner ghosts too), for
+        fields that are mirrored again later (the search direction of the pressure
+        solve), and sign[g], the sign that carries a pressure increment to it (-1 across
+        a drained wall).
+
+    Returns
+    -------
+    int
+        the number of ghosts, or -1 if `cap` rows are not enough.
+    """
+    wall_axis, wall_pos, wall_sign, wall_fixed, wall_drained = walls
+    x, v, v_slip, key = f.x, f.v, f.v_slip, f.key
+    src, src_sign = ghosts
     nw = wall_axis.shape[0]
     three = x.shape[1] == 3
     for j in range(n_real):
@@ -115,8 +147,8 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 continue
             if g >= cap:
                 return -1
-            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], wall_drained[w], x, v,
-                    v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b, body)
+            _mirror(j, g, wall_axis[w], wall_pos[w], wall_fixed[w], wall_drained[w], f,
+                    head_b, body)
             key[g] = key[j] + key_stride * (1 + w)
             src[g] = j
             src_sign[g] = -1.0 if wall_drained[w] else 1.0
@@ -131,8 +163,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                 if g >= cap:
                     return -1
                 _mirror(gg, g, wall_axis[w2], wall_pos[w2], wall_fixed[w2], wall_drained[w2],
-                        x, v, v_slip, stress, p, p_prev, poro, vol, rho, perm, acc, key, head_b,
-                        body)
+                        f, head_b, body)
                 key[g] = key[j] + key_stride * (1 + nw + w * nw + w2)
                 src[g] = j
                 src_sign[g] = src_sign[gg] * (-1.0 if wall_drained[w2] else 1.0)
@@ -147,8 +178,7 @@ def make_ghosts(n_real, cap, reach, key_stride, wall_axis, wall_pos, wall_sign, 
                     if g >= cap:
                         return -1
                     _mirror(ge, g, wall_axis[w3], wall_pos[w3], wall_fixed[w3],
-                            wall_drained[w3], x, v, v_slip, stress, p, p_prev, poro, vol, rho,
-                            perm, acc, key, head_b, body)
+                            wall_drained[w3], f, head_b, body)
                     key[g] = key[j] + key_stride * (1 + nw + nw * nw + (w * nw + w2) * nw + w3)
                     src[g] = j
                     src_sign[g] = src_sign[ge] * (-1.0 if wall_drained[w3] else 1.0)
@@ -161,7 +191,22 @@ def wall_contact(n_owned, x, v, u, wall_axis, wall_pos, wall_sign):
     """No penetration: an owned particle found beyond a wall plane is reflected back into
     the soil and loses its velocity into the wall. Ghost stresses keep particles off the
     walls in compression; a particle in tension (at the Drucker-Prager apex, Eq. 14) is
-    pulled toward its own mirror image, and this stops it. Returns the number moved."""
+    pulled toward its own mirror image, and this stops it.
+
+    Parameters
+    ----------
+    n_owned : int
+        the owned rows, the particles put back.
+    x, v, u : (cap, dim) float arrays
+        positions (m), velocities (m/s) and displacements (m), changed on the rows moved.
+    wall_axis, wall_pos, wall_sign : arrays
+        the walls x[axis] = pos (m) with the soil on the side `sign` (as `bundles.Walls`).
+
+    Returns
+    -------
+    int
+        the number of reflections (a particle beyond two walls counts twice).
+    """
     moved = 0
     for i in range(n_owned):
         for w in range(wall_axis.shape[0]):

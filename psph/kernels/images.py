@@ -27,6 +27,7 @@ import math
 import numba as nb
 import numpy as np
 
+from psph.kernels.bundles import ImageFields, ImageWeights, PairFields, PairParams
 from psph.kernels.spline import dw_cubic_dim
 from psph.kernels.sum_columns import Q_X, SUM_A, SUM_AP, SUM_APSI, sum_layout
 
@@ -36,10 +37,13 @@ assert SUM_AP == SUM_A + 1 and SUM_APSI == SUM_A + 2 and sum_layout(3).SUM_APSI 
 
 
 @nb.njit(cache=True, inline="always")
-def _add_image(sums, i, vol_j, kbar, f2, p_image, d0, d1, d2, b0, b1, b2, three):
-    """One image neighbour at x_i + (d0, d1[, d2]) with pressure p_image into row i of
-    sums (indexed in place: a row view per pair costs more than the pair's arithmetic);
-    b = rho_l times the body force; three: the 3D layout of sums."""
+def _add_image(sums, i, vol_j, kbar, f2, p_image, d, par, three):
+    """One image neighbour at x_i + d, d = (d0, d1, d2) (d2 unused in 2D), with pressure
+    p_image into row i of sums (indexed in place: a row view per pair costs more than the
+    pair's arithmetic); par.rho_l_b0, rho_l_b1, rho_l_b2: rho_l times the body force
+    (`bundles.PairParams`); three: the 3D layout of sums."""
+    d0, d1, d2 = d
+    b0, b1, b2 = par.rho_l_b0, par.rho_l_b1, par.rho_l_b2
     aij = vol_j * kbar * f2
     if three:
         cq, ca = Q3, SUM_A3
@@ -132,10 +136,8 @@ def make_image_sums(dim: int):
     three = dim == 3
 
     @nb.njit(cache=True, error_model="numpy")
-    def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray, p: np.ndarray,
-                   p_prev: np.ndarray, vol: np.ndarray, perm: np.ndarray, planes: np.ndarray,
-                   h: float, tpi_alpha: float, rho_l_b0: float, rho_l_b1: float,
-                   sums: np.ndarray, rho_l_b2: float = 0.0) -> None:
+    def image_sums(n_owned: int, n_pairs: int, pairs: np.ndarray, fields: PairFields,
+                   planes: np.ndarray, par: PairParams, sums: np.ndarray) -> None:
         """Add the images across each active plane to the Darcy sums (Q, SUM_A, SUM_AP,
         SUM_APSI) of owned rows: the image of the other row of every recorded pair, then
         each row's own image. p~ = p + alpha (p - p_prev) as in Eq. (38)-(39); the
@@ -150,26 +152,22 @@ def make_image_sums(dim: int):
             pairs recorded by `interactions.pair_sums`.
         pairs : (>= n_pairs, 2) int64 array
             the recorded pairs (a, b), in visiting order.
-        x : (n, dim) float64 array
-            positions (m).
-        p, p_prev : (n,) float64 arrays
-            pore pressure now and one step before (Pa).
-        vol : (n,) float64 array
-            particle volumes (m^3; m^2 per unit thickness in 2D).
-        perm : (n,) float64 array
-            hydraulic conductivity k (m/s).
+        fields : `bundles.PairFields`
+            the fields of the pair sweep; read here: positions x (m), pore pressure now
+            and one step before p, p_prev (Pa), volumes vol (m^3; m^2 per unit thickness
+            in 2D) and hydraulic conductivity perm (m/s).
         planes : (n_planes, 4) float64 array
             rows (axis, position (m), sign, active): sign +1 with the soil at larger
             x[axis]; active 0 while the side is not yet drained.
-        h : float
-            smoothing length (m).
-        tpi_alpha : float
-            alpha of Eq. (39) (0 for the explicit scheme).
-        rho_l_b0, rho_l_b1, rho_l_b2 : float
-            rho_l times the body force (N/m^3); rho_l_b2 in 3D only.
+        par : `bundles.PairParams`
+            the scalars of the pair sweep; read here: the smoothing length h (m), alpha
+            of Eq. (39) tpi_alpha (0 for the explicit scheme) and rho_l times the body
+            force rho_l_b0, rho_l_b1, rho_l_b2 (N/m^3; rho_l_b2 in 3D only).
         sums : (cap, nsums) float64 array
             the pair sums, `sum_columns.sum_layout(dim)`; the Darcy columns are added to.
         """
+        x, p, p_prev, vol, perm = fields.x, fields.p, fields.p_prev, fields.vol, fields.perm
+        h, tpi_alpha = par.h, par.tpi_alpha
         support2 = 4.0 * h * h
         for q in range(planes.shape[0]):
             ax, pos, sg = _plane(planes, q)
@@ -193,14 +191,12 @@ def make_image_sums(dim: int):
                 kbar = 0.5 * (perm[a] + perm[b])
                 if a < n_owned:
                     pt = p[b] + tpi_alpha * (p[b] - p_prev[b])
-                    d0, d1, d2 = _components(ax, d_ax, d_o1, d_o2)
-                    _add_image(sums, a, vol[b], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
-                               rho_l_b2, three)
+                    _add_image(sums, a, vol[b], kbar, f2, -pt,
+                               _components(ax, d_ax, d_o1, d_o2), par, three)
                 if b < n_owned:
                     pt = p[a] + tpi_alpha * (p[a] - p_prev[a])
-                    d0, d1, d2 = _components(ax, d_ax, -d_o1, -d_o2)
-                    _add_image(sums, b, vol[a], kbar, f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
-                               rho_l_b2, three)
+                    _add_image(sums, b, vol[a], kbar, f2, -pt,
+                               _components(ax, d_ax, -d_o1, -d_o2), par, three)
             for i in range(n_owned):
                 d_ax = 2.0 * (pos - x[i, ax])
                 if sg * d_ax >= 0.0 or d_ax * d_ax >= support2:
@@ -208,9 +204,8 @@ def make_image_sums(dim: int):
                 r = abs(d_ax)
                 f2 = -2.0 * dw_cubic_dim(r, h, dim) / r
                 pt = p[i] + tpi_alpha * (p[i] - p_prev[i])
-                d0, d1, d2 = _components(ax, d_ax, 0.0, 0.0)
-                _add_image(sums, i, vol[i], perm[i], f2, -pt, d0, d1, d2, rho_l_b0, rho_l_b1,
-                           rho_l_b2, three)
+                _add_image(sums, i, vol[i], perm[i], f2, -pt, _components(ax, d_ax, 0.0, 0.0),
+                           par, three)
 
     return image_sums
 
@@ -220,16 +215,15 @@ image_sums_3d = make_image_sums(3)
 
 
 @nb.njit(cache=True)
-def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
-                  perm: np.ndarray, rho: np.ndarray, vol: np.ndarray, planes: np.ndarray,
-                  h: float, k_scale: float, rho_scale: float, w: np.ndarray,
-                  w_diag: np.ndarray, w_off: np.ndarray, storage: np.ndarray) -> None:
+def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, fields: ImageFields,
+                  planes: np.ndarray, h: float, k_scale: float, rho_scale: float,
+                  w: np.ndarray, out: ImageWeights) -> None:
     """The images in the operator of the pressure solve (`laplacian.py`): a recorded pair
     (a, b) of weight w couples a to b* with the weight w* = 2F_ab* (k_scale kbar +
     rho_scale / rhobar), and q_a - q_b* = q_a + q_b, so the pair's diagonal weight is
     w + w* and its off-diagonal w - w* (still symmetric: the reflection keeps
     |x_a - x_b*| = |x_b - x_a*|). A row's own image adds 2 V_i w*_ii q_i, kept in
-    `storage` (V_i storage_i q_i of the operator).
+    out.storage (V_i storage_i q_i of the operator).
 
     Planes exist for the free sides that drain with `drained_boundary = "mirror"` (a side
     that stays a plane, `drainage.py`); an impervious or non-planar free surface has no
@@ -244,20 +238,24 @@ def image_weights(n_owned: int, n_pairs: int, pairs: np.ndarray, x: np.ndarray,
 
     Parameters
     ----------
-    n_owned, n_pairs, pairs, x, perm, vol, planes, h
+    n_owned, n_pairs, pairs, planes
         as `image_sums`.
-    rho : (n,) float64 array
-        mixture density (kg/m^3).
+    fields : `bundles.ImageFields`
+        positions x (m), hydraulic conductivity perm (m/s), mixture density rho
+        (kg/m^3) and volumes vol (m^3; m^2 per unit thickness in 2D).
+    h : float
+        smoothing length (m).
     k_scale, rho_scale : float
         the factors of the Darcy and velocity-correction parts, as
         `laplacian.pair_weights` (m^3/N and s).
     w : (n_pairs,) float64 array
         the pairs' weights without images (`laplacian.pair_weights`).
-    w_diag, w_off : (n_pairs,) float64 arrays
-        receive w + w* and w - w*.
-    storage : (n,) float64 array
-        a row's own image is added here (V_i storage_i q_i of the operator).
+    out : `bundles.ImageWeights`
+        w_diag, w_off, (n_pairs,) float64 arrays, receive w + w* and w - w*; a row's own
+        image is added to storage, (n,) float64 (V_i storage_i q_i of the operator).
     """
+    x, perm, rho, vol = fields.x, fields.perm, fields.rho, fields.vol
+    w_diag, w_off, storage = out.w_diag, out.w_off, out.storage
     support2 = 4.0 * h * h
     for k in range(n_pairs):
         w_diag[k] = w[k]

@@ -97,9 +97,8 @@ def make_nonlocal_strain(dim: int):
         return vol_j * w_cubic_dim(math.sqrt(r2), lc, dim)
 
     @nb.njit(cache=True)
-    def nonlocal_strain(n_owned, n_real, x, vol, eps_p, material, lengths, weights, cell_of,
-                        cell_start, order, ncell, rings, plastic_cell, wall_axis, wall_pos,
-                        out):
+    def nonlocal_strain(n_owned, n_real, fields, lengths, weights, cells, rings, plastic_cell,
+                        wall_axis, wall_pos, out):
         """The over-non-local strain eps_hat_i of particles 0..n_owned-1 (module docstring).
 
         An image of j lies no closer to i than j itself (both on the soil's side), so the
@@ -116,18 +115,16 @@ def make_nonlocal_strain(dim: int):
             owned rows 0..n_owned-1.
         n_real : int
             rows 0..n_real-1 are real particles (owned and halo); boundary rows follow.
-        x : (cap, dim) float64 array
-            positions (m).
-        vol : (cap,) float64 array
-            particle volumes (m^3; m^2 per unit thickness in 2D).
-        eps_p : (cap,) float64 array
-            local equivalent plastic strain (dimensionless).
-        material : (cap,) array
-            each particle's material index.
+        fields : `bundles.NonlocalFields`
+            positions x, (cap, dim) float64 (m); particle volumes vol, (cap,) float64
+            (m^3; m^2 per unit thickness in 2D); the local equivalent plastic strain
+            eps_p, (cap,) float64 (dimensionless); each particle's material index
+            material, (cap,).
         lengths, weights : (n_materials,) float64 arrays
             l_c (m) and m of each material (l_c = 0: local, out = eps_p).
-        cell_of, cell_start, order, ncell : int64 arrays
-            the step's cell lists (cells of side 2h, particles in key order in a cell).
+        cells : `bundles.CellList`
+            the step's cell list (cells of side 2h, particles in key order in a cell),
+            int64 arrays.
         rings : int
             cells to search on each side, >= 2 max l_c / (2h) (`rings_for`).
         plastic_cell : int8 array
@@ -139,6 +136,9 @@ def make_nonlocal_strain(dim: int):
         out : (>= n_owned,) float64 array
             receives eps_hat (dimensionless, >= 0).
         """
+        x, vol, eps_p, material = fields.x, fields.vol, fields.eps_p, fields.material
+        cell_of, cell_start = cells.cell_of, cells.cell_start
+        order, ncell = cells.order, cells.ncell
         ncx = ncell[0]
         ncy = ncell[1]
         ncz = ncell[2] if dim == 3 else 1

@@ -6,8 +6,8 @@ Jacobi preconditioner, the Chronopoulos-Gear recurrences, and inner products tha
 correctly rounded exact sums (`chunked_dot`, the bits `Slabs.exact_sum` gives on any rank
 count). So one rank here and two ranks through `psph.solver.pcg` give the same iterates,
 iteration counts and solution (tests/test_mpi.py), while a step of a small column no
-longer spends 80 % of its time in the Python loop of the solve (issue 14: 48 us an
-iteration for 250 particles).
+longer spends 80 % of its time in the Python loop of the solve (48 us an iteration for 250
+particles).
 """
 
 import math
@@ -15,6 +15,7 @@ import math
 import numba as nb
 import numpy as np
 
+from psph.kernels.bundles import CGWork, DotWork, GhostSources, ScaledOperator
 from psph.kernels.exact_sum import chunked_dot
 from psph.kernels.laplacian import apply_scaled, cg_advance, jacobi
 
@@ -27,20 +28,50 @@ def _refresh_ghosts(n_real: int, n_total: int, src: np.ndarray, sign: np.ndarray
 
 
 @nb.njit(cache=True, error_model="numpy")  # x / 0 -> inf as numpy, not an exception
-def pcg_serial(n: int, n_total: int, n_pairs: int, pairs: np.ndarray, c_diag: np.ndarray,
-               c_off: np.ndarray, c_storage: np.ndarray, fixed: np.ndarray,
-               diag: np.ndarray, rhs: np.ndarray, x: np.ndarray, src: np.ndarray,
-               sign: np.ndarray, tol: float, maxiter: int, r: np.ndarray, u: np.ndarray,
-               w: np.ndarray, d: np.ndarray, sd: np.ndarray, partials: np.ndarray,
-               row: np.ndarray, terms: np.ndarray, acc: np.ndarray,
-               r0: np.ndarray) -> tuple:
-    """Solve S x = rhs on rows 0..n-1 (rows n..n_total-1: wall ghosts, x's current on
-    entry). c_diag, c_off, c_storage: the operator's coefficients
-    (`laplacian.operator_coefficients`); r, u, w, d, sd: scratch as `pcg.PCGWork`;
-    partials, row, terms, acc: scratch of the exact dot products (`exact_sum.chunked_dot`);
-    r0: receives the first residual when it has at least n rows (r the last).
-    Returns (iterations, residual, converged) as `psph.solver.pcg.pcg`, whose
-    Chronopoulos-Gear recurrences these are, step for step."""
+def pcg_serial(n: int, n_total: int, n_pairs: int, op: ScaledOperator, rhs: np.ndarray,
+               x: np.ndarray, ghosts: GhostSources, tol: float, maxiter: int, work: CGWork,
+               dots: DotWork, r0: np.ndarray) -> tuple:
+    """Solve S x = rhs on rows 0..n-1 with the Chronopoulos-Gear recurrences of
+    `psph.solver.pcg.pcg`, step for step.
+
+    Parameters
+    ----------
+    n : int
+        the rows solved for (owned).
+    n_total : int
+        rows n..n_total-1 are wall ghosts, refreshed from their sources.
+    n_pairs : int
+        the pairs of op.pairs in use.
+    op : bundles.ScaledOperator
+        the operator S (`laplacian.operator_coefficients`), its imposed rows and the
+        Jacobi diagonal.
+    rhs : float array
+        the right-hand side (the units of S x).
+    x : float array
+        the solution (Pa for the pressure increment): the initial guess on entry, its
+        ghost rows current.
+    ghosts : bundles.GhostSources
+        each wall ghost's source row and sign.
+    tol : float
+        the relative residual ||rhs - S x|| / ||rhs|| to reach.
+    maxiter : int
+        at most this many iterations.
+    work : bundles.CGWork
+        scratch vectors of at least n_total rows; r holds the last residual on return.
+    dots : bundles.DotWork
+        scratch of the exact dot products.
+    r0 : float array
+        receives the first residual when it has at least n rows.
+
+    Returns
+    -------
+    tuple
+        (iterations, relative residual, converged) as `psph.solver.pcg.pcg`.
+    """
+    pairs, c_diag, c_off, c_storage, fixed, diag = op
+    src, sign = ghosts
+    r, u, w, d, sd = work
+    row, terms, acc, partials = dots
     apply_scaled(n, n_pairs, pairs, c_diag, c_off, c_storage, fixed, x, w)
     for i in range(n):
         r[i] = rhs[i] - w[i]

@@ -150,16 +150,14 @@ def _invariants(sxx, syy, szz, sxy, syz, szx):
 
 
 @nb.njit(cache=True)
-def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta,
-              s_f, tension=math.inf, eps_dilation=-1.0, mohr_coulomb=False):
+def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, law, eps_dilation=-1.0):
     """`dp_return_3d` in plane strain (yz = zx = 0).
 
     Parameters
     ----------
     sxx, syy, szz, sxy : float
         the elastic trial effective stress (Pa).
-    eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, psi0, eta, s_f, tension, eps_dilation,
-    mohr_coulomb
+    eps_p, bulk, shear, law, eps_dilation
         as `dp_return_3d`.
 
     Returns
@@ -167,14 +165,12 @@ def dp_return(sxx, syy, szz, sxy, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r, ps
     tuple
         (sxx, syy, szz, sxy, d_lambda, d_eps_p, d_w), as `dp_return_3d`.
     """
-    r = dp_return_3d(sxx, syy, szz, sxy, 0.0, 0.0, eps_p, bulk, shear, phi_p, phi_r, c_p,
-                     c_r, psi0, eta, s_f, tension, eps_dilation, mohr_coulomb)
+    r = dp_return_3d(sxx, syy, szz, sxy, 0.0, 0.0, eps_p, bulk, shear, law, eps_dilation)
     return r[0], r[1], r[2], r[3], r[6], r[7], r[8]
 
 
 @nb.njit(cache=True)
-def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r, c_p, c_r,
-                 psi0, eta, s_f, tension=math.inf, eps_dilation=-1.0, mohr_coulomb=False):
+def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, law, eps_dilation=-1.0):
     """Return the trial stress to the Drucker-Prager surface.
 
     A trial state with f <= 0 and sigma'_m <= tension is returned unchanged (d_lambda = 0,
@@ -206,16 +202,14 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
         particle's own or the regularised one.
     bulk, shear : float
         bulk modulus K and shear modulus G (Pa).
-    phi_p, phi_r, c_p, c_r, psi0, eta, s_f
-        the softening parameters of Eq. (17)-(19), as `softened` (rad, Pa).
-    tension : float
-        tension cut-off of the mean effective stress (Pa); inf: none (the apex
-        c cot(phi) of Eq. 14 bounds it).
+    law : `bundles.DruckerPrager`
+        the material's law: the softening parameters of Eq. (17)-(19) phi_p, phi_r,
+        c_p, c_r, psi0, eta, s_f, as `softened` (rad, Pa); the tension cut-off of the
+        mean effective stress (Pa; inf: none, the apex c cot(phi) of Eq. 14 bounds it);
+        mohr_coulomb: the Lode-dependent cone (above) instead of Eq. (16).
     eps_dilation : float
         >= 0: the strain whose Eq. (19) decays psi, the particle's own eps_p when eps_p
         here is the regularised one (`update.advance`); < 0: eps_p, as for phi and c.
-    mohr_coulomb : bool
-        the Lode-dependent cone (above) instead of Eq. (16).
 
     Returns
     -------
@@ -226,6 +220,8 @@ def dp_return_3d(sxx, syy, szz, sxy, syz, szx, eps_p, bulk, shear, phi_p, phi_r,
         = d_lambda / sqrt(3), and the plastic work increment d_w = sigma : d eps_p
         (J/m^3, `plastic_work_increment`).
     """
+    phi_p, phi_r, c_p, c_r, psi0 = law.phi_p, law.phi_r, law.c_p, law.c_r, law.psi0
+    eta, s_f, tension, mohr_coulomb = law.eta, law.s_f, law.tension, law.mohr_coulomb
     phi, c, psi = softened(eps_p, phi_p, phi_r, c_p, c_r, psi0, eta, s_f)
     if eps_dilation >= 0.0:
         psi = psi0 * math.exp(-s_f * eps_dilation)

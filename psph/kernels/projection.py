@@ -22,6 +22,7 @@ first it is [[1, -1], [a, 1]] / (1+a), |lambda|^2 = 1 / (1+a): stable and damped
 import numba as nb
 import numpy as np
 
+from psph.kernels.bundles import FluidParams
 from psph.kernels.free_surface import on_free_surface
 from psph.kernels.interactions import symmetric_gradient_sums
 from psph.kernels.kinematics import inverse_moment_3d
@@ -66,9 +67,8 @@ def make_projection_rhs(dim: int):
 
     @nb.njit(cache=True, error_model="numpy")
     def projection_rhs(n_owned: int, sums: np.ndarray, p: np.ndarray, perm: np.ndarray,
-                       vol: np.ndarray, poro: np.ndarray, rho_l: float, b0: float,
-                       b1: float, gamma_l: float, bulk_water: float, dt: float,
-                       storage: np.ndarray, rhs: np.ndarray, b2: float = 0.0) -> None:
+                       vol: np.ndarray, poro: np.ndarray, fluid: FluidParams, dt: float,
+                       storage: np.ndarray, rhs: np.ndarray) -> None:
         """The storage and right-hand side of the projection's solve: storage_i =
         n_i / (K_l dt) and rhs_i = V_i (lap_i / gamma_l - div v*_i), with lap the corrected
         Darcy term of Eq. (23) at p^n (as in the explicit Eq. 25) and div v* from the
@@ -89,14 +89,10 @@ def make_projection_rhs(dim: int):
             particle volumes (m^3; m^2 per unit thickness in 2D).
         poro : (cap,) float64 array
             porosity n.
-        rho_l : float
-            pore-water density (kg/m^3).
-        b0, b1, b2 : float
-            body force (m/s^2); b2 in 3D only.
-        gamma_l : float
-            unit weight of water rho_l g (N/m^3).
-        bulk_water : float
-            bulk modulus of water K_l (Pa).
+        fluid : `bundles.FluidParams`
+            pore-water density rho_l (kg/m^3), unit weight of water gamma_l = rho_l g
+            (N/m^3), bulk modulus of water bulk_water = K_l (Pa) and body force b0, b1, b2
+            (m/s^2; b2 in 3D only).
         dt : float
             time step (s).
         storage : (cap,) float64 array
@@ -104,6 +100,8 @@ def make_projection_rhs(dim: int):
         rhs : (cap,) float64 array
             receives the right-hand side (m^3/s; m^2/s in 2D).
         """
+        rho_l, gamma_l, bulk_water = fluid.rho_l, fluid.gamma_l, fluid.bulk_water
+        b0, b1, b2 = fluid.b0, fluid.b1, fluid.b2
         for i in range(n_owned):
             s = sums[i]
             if dim == 2:

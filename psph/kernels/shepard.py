@@ -196,8 +196,7 @@ def make_filters(dim: int):
     n_stress = 4 if dim == 2 else 6  # xx, yy, zz, xy (2D); + yz, zx (3D)
 
     @nb.njit(cache=True)
-    def shepard_pressure(n_total, n_owned, x, p, p_prev, vol, drained_from, t, cell_start,
-                         order, ncell, h, mom):
+    def shepard_pressure(n_total, n_owned, x, p, p_prev, vol, drained_from, t, cells, h, mom):
         """Filter p of particles 0..n_owned-1 in place (Eq. 46). Particles with an imposed
         pressure (drained_from <= t) keep it. p_prev moves with p, so the TPI increment
         p - p_prev of Eq. (39) is not changed by the filter.
@@ -218,15 +217,15 @@ def make_filters(dim: int):
             time from which p = 0 is imposed (s).
         t : float
             time (s).
-        cell_start, order, ncell : int64 arrays
-            a cell list with cells of side 2h.
+        cells : `bundles.CellList`
+            a cell list with cells of side 2h (cell_of is not read).
         h : float
             smoothing length (m).
         mom : (>= n_owned, 2) float64 array
             scratch.
         """
-        moments(n_owned, x, p.reshape((p.shape[0], 1)), vol, cell_start, order, ncell, h,
-                False, mom)
+        moments(n_owned, x, p.reshape((p.shape[0], 1)), vol, cells.cell_start, cells.order,
+                cells.ncell, h, False, mom)
         for i in range(n_owned):
             if drained_from[i] > t and mom[i, 0] > 0.0:
                 filtered = mom[i, 1] / mom[i, 0]
@@ -234,7 +233,7 @@ def make_filters(dim: int):
                 p[i] = filtered
 
     @nb.njit(cache=True)
-    def shepard_stress(n_total, n_owned, x, stress, vol, cell_start, order, ncell, h, mom):
+    def shepard_stress(n_total, n_owned, x, stress, vol, cells, h, mom):
         """Filter the effective stress (xx, yy, zz, xy; 3D also yz, zx) of particles
         0..n_owned-1 in place with the same zeroth-order Shepard sum as Eq. (46): the stress
         regularisation the paper points to for this noise (its ref. [14], there with MLS,
@@ -244,21 +243,22 @@ def make_filters(dim: int):
 
         Parameters
         ----------
-        n_total, n_owned, x, vol, cell_start, order, ncell, h
+        n_total, n_owned, x, vol, cells, h
             as `shepard_pressure`.
         stress : (cap, 4) or (cap, 6) float64 array
             effective stress (Pa), filtered in place.
         mom : (>= n_owned, 1 + the stress's columns) float64 array
             scratch.
         """
-        moments(n_owned, x, stress, vol, cell_start, order, ncell, h, False, mom)
+        moments(n_owned, x, stress, vol, cells.cell_start, cells.order, cells.ncell, h, False,
+                mom)
         for i in range(n_owned):
             if mom[i, 0] > 0.0:
                 for c in range(n_stress):
                     stress[i, c] = mom[i, 1 + c] / mom[i, 0]
 
     @nb.njit(cache=True)
-    def mls_stress(n_total, n_owned, x, stress, vol, cell_start, order, ncell, h, mom):
+    def mls_stress(n_total, n_owned, x, stress, vol, cells, h, mom):
         """Filter the effective stress of particles 0..n_owned-1 in place with the
         first-order moving-least-squares kernel, the stress regularisation of the paper's
         ref. [14] (Section 3.5.2):
@@ -275,14 +275,15 @@ def make_filters(dim: int):
 
         Parameters
         ----------
-        n_total, n_owned, x, vol, cell_start, order, ncell, h
+        n_total, n_owned, x, vol, cells, h
             as `shepard_pressure`.
         stress : (cap, 4) or (cap, 6) float64 array
             effective stress (Pa), filtered in place.
         mom : (>= n_owned, `moment_width(dim, True, columns)`) float64 array
             scratch.
         """
-        moments(n_owned, x, stress, vol, cell_start, order, ncell, h, True, mom)
+        moments(n_owned, x, stress, vol, cells.cell_start, cells.order, cells.ncell, h, True,
+                mom)
         for i in range(n_owned):
             r = mom[i]
             if dim == 2:

@@ -11,6 +11,7 @@ import math
 
 import numba as nb
 
+from psph.kernels.bundles import DruckerPrager
 from psph.kernels.free_surface import on_free_surface
 from psph.kernels.kinematics import inverse_moment_3d, jaumann_elastic_3d, velocity_gradient_3d
 from psph.kernels.plasticity import dp_return, dp_return_3d
@@ -80,6 +81,27 @@ def _inverse_moment(s):
 
 
 @nb.njit(cache=True, inline="always")
+def drucker_prager(row):
+    """The Drucker-Prager law of a material (`plasticity.dp_return_3d`) from its row of
+    the material table.
+
+    Parameters
+    ----------
+    row : (MAT_COLUMNS,) float64 array
+        the material's row of the material table (`advance`).
+
+    Returns
+    -------
+    `bundles.DruckerPrager`
+        phi_p, phi_r (rad), c_p, c_r (Pa), psi_0 (rad), eta, s_f of Eq. (17)-(19), the
+        tension cut-off (Pa) and the Mohr-Coulomb flag.
+    """
+    d = MAT_DP
+    return DruckerPrager(row[d], row[d + 1], row[d + 2], row[d + 3], row[d + 4], row[d + 5],
+                         row[d + 6], row[MAT_TENSION], row[MAT_MOHR_COULOMB] > 0.0)
+
+
+@nb.njit(cache=True, inline="always")
 def tpi_pressure(b_i, sum_a, sum_ap, p_i, beta, dt):
     """p_i^(t+1) of the TPI update: Eq. (38) with p~_j = p_j + alpha (p_j - p_j^prev) of
     Eq. (39) already summed in sum_ap = sum_j A_ij p~_j; with beta > 0, the storage of
@@ -130,10 +152,12 @@ def tpi_pressure(b_i, sum_a, sum_ap, p_i, beta, dt):
 
 
 @nb.njit(cache=True, inline="always")
-def _momentum(i, s, cdv, v, acc, rho, vol, load_index, traction, load_value, b0, b1, b2,
-              damping, dt, dim):
+def _momentum(i, s, cdv, f, loads, b0, b1, b2, damping, dt, dim):
     """dv/dt of Eq. (45): Eq. (26) (the sums from column cdv) + body force + damping
-    Eq. (43)-(44) + surface tractions; stored in acc and applied to v (dim components)."""
+    Eq. (43)-(44) + surface tractions (`bundles.SurfaceLoads`); stored in f.acc and
+    applied to f.v (`bundles.UpdateFields`, dim components)."""
+    v, acc, rho, vol = f.v, f.acc, f.rho, f.vol
+    load_index, traction, load_value = loads.load_index, loads.traction, loads.load_value
     a0 = s[cdv] + b0 - damping * v[i, 0]
     a1 = s[cdv + 1] + b1 - damping * v[i, 1]
     a2 = s[cdv + 2] + b2 - damping * v[i, 2] if dim == 3 else 0.0
@@ -189,8 +213,7 @@ def set_porosity(i, n_new, poro, poro0, vol, vol0, rho, perm, rho_s, rho_l, k_sa
 
 
 @nb.njit(cache=True)
-def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, vol, vol0,
-                                   rho, perm, rho_l, mat, material):
+def porosity_follows_stress_filter(n_owned, trace_before, stress, f, rho_l, mat, material):
     """Move the porosity with the volumetric strain that the stress filter took out of (or
     put into) the effective stress, so that both keep carrying the same strain.
 
@@ -211,8 +234,9 @@ def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, v
         tr(sigma') before the filter (Pa).
     stress : (cap, 4) or (cap, 6) float64 array
         the filtered effective stress (Pa).
-    poro, poro0, vol, vol0, rho, perm
-        as `set_porosity`, updated.
+    f : `bundles.PorosityFields`
+        porosity, initial porosity, volume, initial volume (m^3; m^2 in 2D), mixture
+        density (kg/m^3) and hydraulic conductivity (m/s), as `set_porosity`, updated.
     rho_l : float
         water density (kg/m^3).
     mat : (n_materials, MAT_COLUMNS) float64 array
@@ -223,14 +247,13 @@ def porosity_follows_stress_filter(n_owned, trace_before, stress, poro, poro0, v
     for i in range(n_owned):
         row = mat[int(material[i])]
         d_tr = stress[i, 0] + stress[i, 1] + stress[i, 2] - trace_before[i]
-        n_i = poro[i]
-        set_porosity(i, n_i + (1.0 - n_i) * d_tr / row[MAT_BULK3], poro, poro0, vol, vol0,
-                     rho, perm, row[MAT_RHO_S], rho_l, row[MAT_K], row[MAT_C_K])
+        n_i = f.poro[i]
+        set_porosity(i, n_i + (1.0 - n_i) * d_tr / row[MAT_BULK3], f.poro, f.poro0, f.vol,
+                     f.vol0, f.rho, f.perm, row[MAT_RHO_S], rho_l, row[MAT_K], row[MAT_C_K])
 
 
 @nb.njit(cache=True)
-def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol0, rho, perm,
-                                     rho_l, mat, material, bulk_water):
+def porosity_follows_pressure_filter(n_owned, p_before, p, f, rho_l, mat, material, bulk_water):
     """Move the porosity with the volumetric strain that the pressure filter (Eq. 46) took
     out of (or put into) the pore pressure, so that p and n keep carrying the same strain.
 
@@ -251,8 +274,8 @@ def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol
         p before the filter (Pa).
     p : (cap,) float64 array
         the filtered pore pressure (Pa).
-    poro, poro0, vol, vol0, rho, perm
-        as `set_porosity`, updated.
+    f : `bundles.PorosityFields`
+        as `porosity_follows_stress_filter`, updated.
     rho_l : float
         water density (kg/m^3).
     mat, material
@@ -263,10 +286,10 @@ def porosity_follows_pressure_filter(n_owned, p_before, p, poro, poro0, vol, vol
     """
     for i in range(n_owned):
         row = mat[int(material[i])]
-        n_i = poro[i]
+        n_i = f.poro[i]
         dp = p[i] - p_before[i]
-        set_porosity(i, n_i - (1.0 - n_i) * n_i * dp / bulk_water, poro, poro0, vol, vol0,
-                     rho, perm, row[MAT_RHO_S], rho_l, row[MAT_K], row[MAT_C_K])
+        set_porosity(i, n_i - (1.0 - n_i) * n_i * dp / bulk_water, f.poro, f.poro0, f.vol,
+                     f.vol0, f.rho, f.perm, row[MAT_RHO_S], rho_l, row[MAT_K], row[MAT_C_K])
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -326,8 +349,7 @@ def make_kick(dim: int):
     cdv = sum_layout(dim).DVDT
 
     @nb.njit(cache=True, error_model="numpy")
-    def kick(n_owned, sums, v, acc, rho, vol, load_index, traction, load_value, b0, b1,
-             damping, dt, b2=0.0):
+    def kick(n_owned, sums, f, loads, b0, b1, damping, dt, b2=0.0):
         """The kick of the symplectic step, v^(n+1) = v^n + dt a^n (Eq. 45 at the state of
         step n); `advance(..., kicked=True)` then takes the rates from v^(n+1).
 
@@ -337,20 +359,13 @@ def make_kick(dim: int):
             owned rows 0..n_owned-1.
         sums : (cap, nsums) float64 array
             the pair sums (DVDT: the acceleration of Eq. 26, m/s^2).
-        v : (cap, dim) float64 array
-            velocity (m/s), updated.
-        acc : (cap, dim) float64 array
-            receives the acceleration (m/s^2).
-        rho : (cap,) float64 array
-            mixture density (kg/m^3).
-        vol : (cap,) float64 array
-            particle volumes (m^3; m^2 per unit thickness in 2D).
-        load_index : (cap,) float64 array
-            each particle's surface load (-1: none).
-        traction : (cap, dim) float64 array
-            the tributary area vector -n dA of a loaded particle (m^2; m in 2D).
-        load_value : float64 array
-            the loads' current values (Pa).
+        f : `bundles.UpdateFields`
+            the owned rows' fields: f.v, velocity (m/s), updated; f.acc receives the
+            acceleration (m/s^2); f.rho, mixture density (kg/m^3); f.vol, particle
+            volumes (m^3; m^2 per unit thickness in 2D).
+        loads : `bundles.SurfaceLoads`
+            each particle's surface load (load_index, -1: none) and tributary area vector
+            -n dA (traction, m^2; m in 2D), and the loads' current values (load_value, Pa).
         b0, b1, b2 : float
             body force (m/s^2); b2 in 3D only.
         damping : float
@@ -359,8 +374,7 @@ def make_kick(dim: int):
             time step (s).
         """
         for i in range(n_owned):
-            _momentum(i, sums[i], cdv, v, acc, rho, vol, load_index, traction, load_value,
-                      b0, b1, b2, damping, dt, dim)
+            _momentum(i, sums[i], cdv, f, loads, b0, b1, b2, damping, dt, dim)
 
     return kick
 
@@ -440,9 +454,8 @@ def make_advance(dim: int):
         """
         x, u, v, stress, p, p_prev = f.x, f.u, f.v, f.stress, f.p, f.p_prev
         poro, poro0, vol, vol0, rho, perm = f.poro, f.poro0, f.vol, f.vol0, f.rho, f.perm
-        acc, drained_from, material = f.acc, f.drained_from, f.material
+        drained_from, material = f.drained_from, f.material
         eps_p, plastic_work = f.eps_p, f.plastic_work
-        load_index, traction, load_value = loads.load_index, loads.traction, loads.load_value
         dt, t, bulk_water, gamma_l, rho_l = par.dt, par.t, par.bulk_water, par.gamma_l, par.rho_l
         b0, b1, damping, scheme, beta = par.b0, par.b1, par.damping, par.scheme, par.beta
         b2 = par.b2
@@ -496,12 +509,9 @@ def make_advance(dim: int):
                 stress[i, 2] += dt * lam * (l00 + l11)
                 stress[i, 3] = sxy + dt * (2.0 * shear * e01 + w * (syy - sxx))
                 if plastic and row[MAT_PLASTIC] > 0.0:
-                    d = MAT_DP
                     r = dp_return(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3],
-                                  eps_soft[i], lam + 2.0 * shear / 3.0, shear, row[d],
-                                  row[d + 1], row[d + 2], row[d + 3], row[d + 4], row[d + 5],
-                                  row[d + 6], row[MAT_TENSION],
-                                  eps_p[i], row[MAT_MOHR_COULOMB] > 0.0)
+                                  eps_soft[i], lam + 2.0 * shear / 3.0, shear,
+                                  drucker_prager(row), eps_p[i])
                     stress[i, 0] = r[0]
                     stress[i, 1] = r[1]
                     stress[i, 2] = r[2]
@@ -515,13 +525,10 @@ def make_advance(dim: int):
                 div_v = lg[0] + lg[4] + lg[8]
                 jaumann_elastic_3d(stress, i, lg, lam, shear, dt)
                 if plastic and row[MAT_PLASTIC] > 0.0:
-                    d = MAT_DP
                     r3 = dp_return_3d(stress[i, 0], stress[i, 1], stress[i, 2], stress[i, 3],
                                       stress[i, 4], stress[i, 5], eps_soft[i],
-                                      lam + 2.0 * shear / 3.0, shear, row[d], row[d + 1],
-                                      row[d + 2], row[d + 3], row[d + 4], row[d + 5],
-                                      row[d + 6], row[MAT_TENSION], eps_p[i],
-                                      row[MAT_MOHR_COULOMB] > 0.0)
+                                      lam + 2.0 * shear / 3.0, shear, drucker_prager(row),
+                                      eps_p[i])
                     for c in range(6):
                         stress[i, c] = r3[c]
                     eps_p[i] += r3[7]
@@ -583,8 +590,7 @@ def make_advance(dim: int):
                              row[MAT_K], row[MAT_C_K])
 
             if not kicked:
-                _momentum(i, s, cdv, v, acc, rho, vol, load_index, traction, load_value, b0,
-                          b1, b2, damping, dt, dim)
+                _momentum(i, s, cdv, f, loads, b0, b1, b2, damping, dt, dim)
             for d in range(dim):
                 x[i, d] += dt * v[i, d]
                 u[i, d] += dt * v[i, d]

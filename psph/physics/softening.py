@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from psph.kernels.bundles import CellList, NonlocalFields, fields_of
 from psph.kernels.nonlocal_strain import nonlocal_strain, nonlocal_strain_3d, rings_for
 
 
@@ -86,8 +87,8 @@ class NonlocalSoftening:
         if self.plastic_cell.shape[0] < cells:
             self.plastic_cell = np.zeros(2 * cells, np.int8)
         average = nonlocal_strain if len(ncell) == 2 else nonlocal_strain_3d
-        average(st.n_owned, st.n_real, st.x, st.vol, st.eps_p, st.material, self.lengths,
-                self.weights, cell_of, cell_start, order, ncell, self.rings,
+        average(st.n_owned, st.n_real, fields_of(NonlocalFields, st.arrays), self.lengths,
+                self.weights, CellList(cell_of, cell_start, order, ncell), self.rings,
                 self.plastic_cell, self.wall_axis, self.wall_pos, self.eps_hat)
 
 

@@ -38,6 +38,15 @@ from psph.kernels.boundary import (
     place_rows,
 )
 from psph.kernels.boundary_3d import boundary_state_3d
+from psph.kernels.bundles import (
+    BoundaryPoints,
+    BoundaryRows,
+    CellList,
+    ContactFields,
+    ContactGrid,
+    WallFields,
+    fields_of,
+)
 from psph.physics.softening import reach
 
 _MOTION = {"fixed": MOTION_FIXED, "slip": MOTION_SLIP, "friction": MOTION_FRICTION}
@@ -152,17 +161,13 @@ class BoundaryParticles:
         """Velocity, pressure, effective stress, porosity, density, conductivity and
         acceleration of the boundary rows (and v_slip = v on the real rows)."""
         st = store
+        f = fields_of(WallFields, st.arrays, v_slip=v_slip)
+        cells = CellList(cell_of, cell_start, order, ncell)
         if self.dim == 3:
-            boundary_state_3d(st.n_real, self.first, self.n, self.src, self.motion,
-                              self.tan_phi, self.drained, self.normal, self.foot, st.x,
-                              st.v, v_slip,
-                              st.stress, st.p, st.p_prev, st.poro, st.rho, st.perm, st.acc,
-                              head_b, body, cell_of, cell_start, order, ncell, self.h)
+            boundary_state_3d(st.n_real, self._rows(), self._points(), f, head_b, body, cells,
+                              self.h)
             return
-        boundary_state(st.n_real, self.first, self.n, self.src, self.motion, self.tan_phi,
-                       self.drained, self.normal, st.x, st.v, v_slip, st.stress, st.p,
-                       st.p_prev, st.poro, st.rho, st.perm, st.acc, head_b, cell_of,
-                       cell_start, order, ncell, self.h)
+        boundary_state(st.n_real, self._rows(), self._points(), f, head_b, cells, self.h)
 
     def contact(self, store, origin, cell_size, grid_lo, ncell, cell_start, order,
                 dt: float) -> int:
@@ -170,7 +175,16 @@ class BoundaryParticles:
         friction of the particles touching a `weight_friction` wall (`boundary_contact`)."""
         st = store
         np.multiply(self.weight_friction, dt, out=self.weight_dv)
-        return boundary_contact(st.n_owned, st.x, st.v, st.u, self.first, self.n, self.src,
-                                self.normal, self.foot, origin, cell_size, grid_lo, ncell,
-                                cell_start, order, self.h, self.weight_dv, self.reach,
-                                st.stress, st.rho, self.half_weight, self.rho_water)
+        return boundary_contact(st.n_owned, fields_of(ContactFields, st.arrays),
+                                self._rows(), self._points(),
+                                ContactGrid(origin, grid_lo, ncell, cell_start, order),
+                                cell_size, self.h, self.reach, self.rho_water)
+
+    def _rows(self) -> BoundaryRows:
+        """This step's boundary rows of the store (`append`)."""
+        return BoundaryRows(self.first, self.n, self.src)
+
+    def _points(self) -> BoundaryPoints:
+        """The boundary particles' per-particle arrays, as the kernels take them."""
+        return BoundaryPoints(self.motion, self.tan_phi, self.drained, self.normal, self.foot,
+                              self.weight_dv, self.half_weight)

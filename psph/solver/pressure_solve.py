@@ -8,6 +8,16 @@ import math
 
 import numpy as np
 
+from psph.kernels.bundles import (
+    CGWork,
+    DotWork,
+    FluidParams,
+    GhostSources,
+    ImageFields,
+    ImageWeights,
+    ScaledOperator,
+    fields_of,
+)
 from psph.kernels.exact_sum import BLOCK, CHUNK_ROW, CHUNKS, EXPANSION_CAP
 from psph.kernels.images import image_weights
 from psph.kernels.laplacian import (
@@ -72,9 +82,9 @@ class PressureSolve:
                                  k_scale, sim.dt * sim.lattice_norm, w)
         if not sim.drainage.has_planes:
             return w, w
-        image_weights(st.n_owned, sim.n_pairs, sim.pairs, st.x, st.perm, st.rho, st.vol,
+        image_weights(st.n_owned, sim.n_pairs, sim.pairs, fields_of(ImageFields, st.arrays),
                       sim.drainage.planes, sim.h, k_scale, sim.dt * sim.lattice_norm, w,
-                      a["w_diag"], a["w_off"], a["storage"])
+                      ImageWeights(a["w_diag"], a["w_off"], a["storage"]))
         return a["w_diag"], a["w_off"]
 
     def _system(self, p: np.ndarray, t: float) -> tuple:
@@ -88,9 +98,9 @@ class PressureSolve:
         n, npairs = st.n_owned, sim.n_pairs
         a = self._arrays(st.cap, npairs)
         imposed, fixed = a["imposed"], a["fixed"]
-        sim.kernels.projection_rhs(n, sim.sums, p, st.perm, st.vol, st.poro, s.rho_l,
-                                   sim.body[0], sim.body[1], s.gamma_l, s.K_l, sim.dt,
-                                   a["storage"], a["rhs"], sim.b2)
+        fluid = FluidParams(s.rho_l, s.gamma_l, s.K_l, sim.body[0], sim.body[1], sim.b2)
+        sim.kernels.projection_rhs(n, sim.sums, p, st.perm, st.vol, st.poro, fluid, sim.dt,
+                                   a["storage"], a["rhs"])
         wd, wo = self._weights(a)
         imposed_increments(n, sim.sums, st.drained_from, sim.drainage.layer_clock(t),
                            sim.ponding == 2, p, imposed)
@@ -194,11 +204,13 @@ class PressureSolve:
         if sim.slabs.size == 1:  # the same bits, compiled (kernels/pcg_serial.py)
             wk = self._work
             wk.ensure(st.cap)
-            res = PCGResult(*pcg_serial(n, nt, npairs, sim.pairs, a["c_diag"], a["c_off"],
-                                        a["c_storage"], fixed, a["diag"], a["rhs"], d,
-                                        sim.ghost_src, sim.ghost_sign, pc.tolerance,
-                                        pc.max_iterations, wk.r, wk.u, wk.w, wk.d, wk.sd,
-                                        self._buf, self._row, self._terms, self._acc,
+            op = ScaledOperator(sim.pairs, a["c_diag"], a["c_off"], a["c_storage"], fixed,
+                                a["diag"])
+            res = PCGResult(*pcg_serial(n, nt, npairs, op, a["rhs"], d,
+                                        GhostSources(sim.ghost_src, sim.ghost_sign),
+                                        pc.tolerance, pc.max_iterations,
+                                        CGWork(wk.r, wk.u, wk.w, wk.d, wk.sd),
+                                        DotWork(self._row, self._terms, self._acc, self._buf),
                                         self._no_r0 if r0 is None else r0))
         else:
             res = pcg(apply, a["diag"], a["rhs"], d, n, self._dots, refresh, pc.tolerance,

@@ -1,10 +1,13 @@
-"""Builds the step pipeline once from the scene and runs the time loop.
+"""The state of a run on this rank and its step: the physics stages the scene needs,
+each declaring what it reads and writes, assembled once into a pipeline
+(`psph/solver/pipeline.py` adds the search and the refreshes those declarations call
+for).
 
 Per step: [rebalance every K] -> exchange (migration + halo) -> ghosts (walls) ->
-neighbours (cell lists) -> interactions (fused pair sums) -> update (Eq. 22-27, 38-45).
-Outputs, diagnostics and progress are scheduled callbacks of the loop; every decision
-that changes control flow comes from a collective or from values identical on all ranks
-(time, step).
+neighbours (cell lists) -> interactions (fused pair sums) -> update (Eq. 22-27, 38-45 of
+Lian et al. 2023), with the filters, the kick, the projection and shifting between where
+the scene asks for them. Every decision that changes control flow comes from a
+collective or from values identical on all ranks (time, step).
 """
 
 import math
@@ -41,10 +44,11 @@ from psph.solver.boundary import BoundaryParticles, halo_width, has_boundary_par
 from psph.solver.cells import CellGrid
 from psph.solver.drainage import Drainage
 from psph.solver.kernel_set import kernels_for
+from psph.solver.pipeline import Stage, assemble
 from psph.solver.pressure_solve import PressureSolve
-from psph.solver.stages import Stage, Stages
+from psph.solver.stages import Stages
 from psph.solver.stepping import time_stepping
-from psph.state.particles import ParticleStore
+from psph.state.particles import NEIGHBOUR_FIELDS, ParticleStore
 
 
 class Simulation(Stages):
@@ -160,7 +164,7 @@ class Simulation(Stages):
         self.body_force = np.array(self.body)  # for the ghosts' wall-normal stress (ghosts.py)
         self.head_b = self.soil.rho_l * np.array(self.body) if scene.pressure.scheme != "none" \
             else np.zeros(dim)
-        # several materials (issue 16): a row per material, indexed by the particle's
+        # several materials: a row per material, indexed by the particle's
         # `material`; damping and the viscosity's sound speed from the stiffest one
         self.mat = material_table(scene)
         self.stiff = stiffest(scene)
@@ -199,6 +203,7 @@ class Simulation(Stages):
         if not self.needs_cells:
             self.cells = None
             self._cell_arrays()
+        self.passes = 0  # passes through the pipeline (a derived refresh follows its writers')
         self.stages = self._assemble()
 
     def _cell_arrays(self) -> None:
@@ -220,7 +225,12 @@ class Simulation(Stages):
     # ------------------------------------------------------------------ pipeline
 
     def _assemble(self) -> list[Stage]:
-        """Only the stages the scene needs, in order."""
+        """Only the stages the scene needs, in order, with the search and refreshes their
+        declarations call for (`pipeline.assemble`)."""
+        return assemble(self._physics_stages(), self._search_stages(), self._refresh_fields)
+
+    def _search_stages(self) -> list[Stage]:
+        """Halo, wall ghosts, boundary particles and cell lists of the current positions."""
         stages = []
         k = self.scene.decomposition.rebalance_every
         if self.slabs.size > 1 and k > 0:
@@ -236,23 +246,52 @@ class Simulation(Stages):
         stages.append(Stage("neighbours", self._neighbours))
         if self.wall_particles:
             stages.append(Stage("boundary_state", self._boundary_state))
+        return stages
+
+    def _physics_stages(self) -> list[Stage]:
+        """The physics of a step, each stage with the fields it reads on neighbours and
+        writes on owned rows."""
+        every_field = frozenset(NEIGHBOUR_FIELDS)
+        stages = []
         if self.coupled and self.drainage.has_planes:
+            # exact sums over owned rows: the same before or after the exchange
             stages.append(Stage("drained_planes", self._drained_planes))
         stab = self.scene.stabilisation
         m = stab.shepard_every
         if self.shepard_filters:
-            names = ["shepard"] if self.coupled else []
+            names, reads, writes = [], {"x", "vol"}, set()
+            if self.coupled:
+                names.append("shepard")
+                reads |= {"p"}
+                writes |= {"p", "p_prev"}
+                if stab.pressure_filter_porosity:
+                    writes |= {"poro", "vol", "rho", "perm"}
             if stab.shepard_stress:
                 shepard = "stress" if self.coupled else "shepard_stress"
                 names.append(shepard if stab.stress_filter == "shepard" else "mls_stress")
-            stages.append(Stage(f"{'+'.join(names)}[every {m}]", self._shepard, every=m))
+                reads |= {"stress"}
+                writes |= {"stress"}
+                if self.coupled and stab.stress_filter_porosity:
+                    writes |= {"poro", "vol", "rho", "perm"}
+            stages.append(Stage(f"{'+'.join(names)}[every {m}]", self._shepard, every=m,
+                                reads=frozenset(reads), writes=frozenset(writes),
+                                neighbours=True))
         name = "interactions[momentum" + (",pressure" if self.coupled else "") + \
             (",acceleration_term" if self.acc_term else "") + "]"
-        stages.append(Stage(name, self._interactions))
+        stages.append(Stage(name, self._interactions, reads=every_field, neighbours=True))
+        v_read = frozenset({"x", "v", "poro", "vol"})
         if self.symplectic:
-            stages.append(Stage("kick+velocity_sweep", self._kick))
+            stages.append(Stage("kick", self._kick, writes=frozenset({"v", "acc"})))
+            stages.append(Stage("velocity_sweep", self._velocity_sweep, reads=v_read,
+                                neighbours=True))
         if self.stepping.scheme_main == SCHEME_PROJECTION:
-            stages.append(Stage("pressure_solve[pcg,jacobi]+correction", self._project))
+            projecting = lambda: self.scheme == SCHEME_PROJECTION  # noqa: E731
+            stages.append(Stage("pressure_solve[pcg,jacobi]+correction", self._project,
+                                reads=frozenset({"x", "p", "poro", "vol", "rho", "perm"}),
+                                writes=frozenset({"v", "p", "p_prev", "acc"}),
+                                neighbours=True, when=projecting))
+            stages.append(Stage("velocity_sweep[corrected]", self._velocity_sweep,
+                                reads=v_read, neighbours=True, when=projecting))
         pname = {SCHEME_NONE: "dry", SCHEME_EXPLICIT: "explicit", SCHEME_TPI: "tpi",
                  SCHEME_PROJECTION: "projection"}[self.stepping.scheme_main]
         if self.stepping.scheme_main == SCHEME_TPI and self.stepping.explicit_until > 0:
@@ -260,12 +299,14 @@ class Simulation(Stages):
         model = ",drucker_prager" if self.plastic else ",elastic"
         if self.softening:  # x as at the neighbour search: before shifting moves it
             stages.append(Stage(self.softening.name(), lambda: self.softening.average(
-                self.store, self.cell_of, self.cell_start, self.order, self.ncell)))
+                self.store, self.cell_of, self.cell_start, self.order, self.ncell),
+                reads=frozenset({"x", "vol"}), neighbours=True))
         if self.shifting > 0.0:
             # before the update: the sweep's volumes, which the update changes on owned
             # rows only (halo copies keep them), so the sums stay partition-independent
-            stages.append(Stage("shifting", self._shift))
-        stages.append(Stage(f"update[{pname}{model}]", self._update))
+            stages.append(Stage("shifting", self._shift, reads=frozenset({"x", "vol"}),
+                                writes=frozenset({"x"}), neighbours=True))
+        stages.append(Stage(f"update[{pname}{model}]", self._update, writes=every_field))
         return stages
 
     def state_bytes(self) -> int:
@@ -301,18 +342,26 @@ class Simulation(Stages):
             self.removals_done += 1
         return removed
 
-    def advance_one(self) -> None:
-        if self.removals_done < len(self.removals):
-            self.apply_removals()
-        self.dt, self.scheme = self.stepping.at(self.t)
+    def _run_pipeline(self, stages: list[Stage], timed: bool = True) -> None:
+        """One pass of `stages` at this step: each that is due runs (and is timed)."""
+        self.passes += 1
         timer = time.perf_counter
-        for stage in self.stages:
-            if self.step % stage.every:
+        for stage in stages:
+            if not stage.due(self.step, self.passes):
                 continue
             t0 = timer()
             stage.run()
-            stage.seconds += timer() - t0
-            stage.calls += 1
+            stage.last_pass = self.passes
+            if timed:
+                stage.seconds += timer() - t0
+                stage.calls += 1
+
+    def advance_one(self) -> None:
+        """One step of the pipeline: removals due, dt and scheme at t, the stages."""
+        if self.removals_done < len(self.removals):
+            self.apply_removals()
+        self.dt, self.scheme = self.stepping.at(self.t)
+        self._run_pipeline(self.stages)
         self.t += self.dt
         self.step += 1
 
@@ -322,7 +371,7 @@ class Simulation(Stages):
 
         The K0 state of `initial.k0` is in equilibrium only under level ground: under a
         slope face or at the free end of a block it unloads at t = 0, and a nearly
-        undrained soil answers that unloading with suction (issue 13, cause 4). For
+        undrained soil answers that unloading with suction. For
         `initial.equilibrate` seconds the step pipeline runs with the pore pressure held
         at its hydrostatic value (drained, the steady state of the water table), no
         removals, no Shepard or rebalancing, and the global damping of Eq. (43)-(44) at
@@ -340,8 +389,7 @@ class Simulation(Stages):
         stages = [s for s in self.stages if s.every == 1]
         wall0 = time.perf_counter()
         for _ in range(steps):
-            for stage in stages:
-                stage.run()
+            self._run_pipeline(stages, timed=False)
         self.dt, self.scheme = dt_scheme
         self.damping = damping
         self.check_failure()

@@ -1,18 +1,20 @@
-"""The stages of one step of the pipeline (`Simulation` assembles them in
-`psph/solver/simulation.py`): exchange, ghosts, boundary rows, neighbours, the Shepard
-filter, the pair sweep, the symplectic kick, the projection, shifting and the update.
-Each stage works on the simulation's particle store and scratch arrays."""
-
-from dataclasses import dataclass
+"""The work of each stage of a step (`Simulation` declares them and
+`psph/solver/pipeline.py` assembles them): the search (exchange, ghosts, boundary rows,
+neighbours), the refresh of fields written since, and the physics (drained planes, the
+Shepard filter, the pair sweep, the symplectic kick, the velocity sweep, the projection,
+shifting and the update). Each works on the simulation's particle store and scratch
+arrays."""
 
 import numpy as np
 
 from psph.kernels.artificial_stress import artificial_stress
 from psph.kernels.bundles import (
+    CellList,
     Cells,
     PairFields,
     PairParams,
     PairRecord,
+    PorosityFields,
     StepParams,
     SurfaceLoads,
     UpdateFields,
@@ -40,18 +42,6 @@ from psph.physics.loads import load_values
 from psph.state.particles import ParticleStore
 
 
-@dataclass
-class Stage:
-    """One named stage of a step; `seconds` accumulates its wall time on this rank."""
-
-    name: str
-    run: callable
-    every: int = 1  # run on steps that are multiples of this
-    seconds: float = 0.0
-    calls: int = 0
-
-
-
 class Stages:
     """The stage methods of `Simulation` (its state is set up by `Simulation.__init__`)."""
 
@@ -75,17 +65,19 @@ class Stages:
         return self._v_slip
 
     def _ghosts(self) -> None:
+        from psph.kernels.bundles import GhostSources, WallFields, Walls
+
         st = self.store
         while True:
             if self.ghost_src.shape[0] < st.cap:
                 self.ghost_src = np.zeros(st.cap, np.int64)
                 self.ghost_sign = np.ones(st.cap)
-            ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids),
-                             self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
-                             self.drainage.update_walls(self.t), st.x, st.v, self.v_slip,
-                             st.stress, st.p, st.p_prev, st.poro, st.vol, st.rho, st.perm,
-                             st.acc, st.key, self.head_b, self.body_force, self.ghost_src,
-                             self.ghost_sign)
+            walls = Walls(self.wall_axis, self.wall_pos, self.wall_sign, self.wall_fixed,
+                          self.drainage.update_walls(self.t))
+            ng = make_ghosts(st.n_real, st.cap, 2.0 * self.h, float(self.n_ids), walls,
+                             fields_of(WallFields, st.arrays, v_slip=self.v_slip),
+                             self.head_b, self.body_force,
+                             GhostSources(self.ghost_src, self.ghost_sign))
             if ng >= 0:
                 st.n_ghost = ng
                 return
@@ -101,6 +93,13 @@ class Stages:
     def _boundary_state(self) -> None:
         self.wall_particles.state(self.store, self.v_slip, self.head_b, self.body_force,
                                   self.cell_of, self.cell_start, self.order, self.ncell)
+
+    def _refresh_fields(self, fields: tuple[str, ...]) -> None:
+        """The owners' current `fields` into the halo, then the wall ghosts and boundary
+        particles again from the real rows (the same neighbours: nothing has moved)."""
+        st = self.store
+        self.slabs.refresh_halo(*(st.arrays[f] for f in fields))
+        self._refresh_walls()
 
     def _refresh_walls(self) -> None:
         """Wall ghosts and boundary particles again from the current real rows."""
@@ -128,14 +127,14 @@ class Stages:
         self.drainage.update_planes(self.t, self.store, self.slabs)
 
     def _shepard(self) -> None:
-        """Eq. (46) on owned particles (the pressure in a coupled scene, the stress if
-        `shepard_stress`), then the halo and ghosts again so that every copy of a particle
-        carries its filtered values (positions have not moved yet)."""
+        """Eq. (46) on owned particles: the pressure in a coupled scene, the stress if
+        `shepard_stress` (the pipeline then refreshes the copies of what it wrote)."""
         st = self.store
         if self.scratch_moments.shape[0] < st.cap:
             self.scratch_moments = np.zeros((st.cap, self.kernels.moment_columns))
             self.scratch_trace = np.zeros(st.cap)
         mom = self.scratch_moments
+        cells = CellList(self.cell_of, self.cell_start, self.order, self.ncell)
         stab = self.scene.stabilisation
         s = self.soil
         if self.coupled and stab.pressure_filter_porosity:
@@ -144,12 +143,12 @@ class Stages:
         if self.coupled:
             self.kernels.shepard_pressure(st.n_total, st.n_owned, st.x, st.p, st.p_prev,
                                           st.vol, st.drained_from,
-                                          self.drainage.layer_clock(self.t), self.cell_start,
-                                          self.order, self.ncell, self.h, mom)
+                                          self.drainage.layer_clock(self.t), cells, self.h,
+                                          mom)
         if self.coupled and stab.pressure_filter_porosity:
             porosity_follows_pressure_filter(
-                st.n_owned, p_before, st.p, st.poro, st.poro0, st.vol, st.vol0, st.rho,
-                st.perm, s.rho_l, self.mat, st.material, s.K_l)
+                st.n_owned, p_before, st.p, fields_of(PorosityFields, st.arrays), s.rho_l,
+                self.mat, st.material, s.K_l)
         if stab.shepard_stress:
             stress_filter = self.kernels.mls_stress if stab.stress_filter == "mls" \
                 else self.kernels.shepard_stress
@@ -158,19 +157,11 @@ class Stages:
             if follow:
                 trace = self.scratch_trace[:st.n_owned]
                 np.sum(st.stress[:st.n_owned, :3], axis=1, out=trace)
-            stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, self.cell_start,
-                          self.order, self.ncell, self.h, mom)
+            stress_filter(st.n_total, st.n_owned, st.x, st.stress, st.vol, cells, self.h, mom)
             if follow:
                 porosity_follows_stress_filter(
-                    st.n_owned, trace, st.stress, st.poro, st.poro0, st.vol, st.vol0, st.rho,
-                    st.perm, s.rho_l, self.mat, st.material)
-        last = "boundary_state" if self.wall_particles else "neighbours"
-        for stage in self.stages[:self.stages.index(self._stage(last)) + 1]:
-            if not stage.name.startswith("rebalance"):
-                stage.run()
-
-    def _stage(self, name: str) -> Stage:
-        return next(s for s in self.stages if s.name == name)
+                    st.n_owned, trace, st.stress, fields_of(PorosityFields, st.arrays),
+                    s.rho_l, self.mat, st.material)
 
     def _interactions(self) -> None:
         st = self.store
@@ -205,14 +196,12 @@ class Stages:
             if n >= 0:
                 self.n_pairs = n
                 if self.coupled and self.drainage.has_planes:
-                    self.kernels.image_sums(st.n_owned, n, self.pairs, st.x, st.p, st.p_prev,
-                                            st.vol, st.perm, self.drainage.planes, self.h,
-                                            alpha, rl * self.body[0], rl * self.body[1],
-                                            self.sums, rl * self.b2)
+                    self.kernels.image_sums(st.n_owned, n, self.pairs, fields,
+                                            self.drainage.planes, par, self.sums)
                 if self.coupled:
                     self.sums[:st.n_owned, self.darcy_columns] *= self.lattice_norm
                 # the stress divergence of Eq. (26) has the same lattice moment: a
-                # uniform stress under a surface load balanced m0 q, not q (README)
+                # uniform stress under a surface load balanced m0 q, not q
                 self.sums[:st.n_owned, self.dvdt_columns] *= self.lattice_norm
                 if self.p_weight < 1.0:
                     pore_pressure_force(st.n_owned, self.sums, st.rho,
@@ -224,15 +213,18 @@ class Stages:
             self.pair_g = np.zeros((grow, self.dim))
 
     def _kick(self) -> None:
-        """Symplectic step: v^(n+1) from the accelerations of step n, copied to the halo
-        and the wall ghosts, then the velocity sums again from v^(n+1)."""
+        """Symplectic step: v^(n+1) from the accelerations of step n (Eq. 45)."""
         st = self.store
         load_values(self.scene.loads, self.t, self.load_value)
-        self.kernels.kick(st.n_owned, self.sums, st.v, st.acc, st.rho, st.vol, st.load_index,
-                          st.traction, self.load_value, self.body[0], self.body[1],
-                          self.damping, self.dt, self.b2)
-        self.slabs.refresh_halo(st.v)
-        self._refresh_walls()
+        self.kernels.kick(st.n_owned, self.sums, fields_of(UpdateFields, st.arrays),
+                          SurfaceLoads(st.load_index, st.traction, self.load_value),
+                          self.body[0], self.body[1], self.damping, self.dt, self.b2)
+
+    def _velocity_sweep(self) -> None:
+        """The velocity sums again from the current v over the pairs of this step's sweep:
+        after the kick, the rates of Eq. (11), (24), (25) take v^(n+1) (the staggered
+        order of Eq. 27); after the projection, the corrected velocity."""
+        st = self.store
         self.kernels.velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs,
                                             self.pair_g, st.v, self.v_slip, st.poro, st.vol,
                                             self.coupled, self.sums)
@@ -288,21 +280,11 @@ class Stages:
 
     def _project(self) -> None:
         """The pressure increment of the step from one solve of Eq. (29) with its velocity
-        correction (`PressureSolve.project`), then the halo and ghost copies and the
-        velocity sums of the corrected velocity. After the kick (symplectic step) or, in
-        the one-sweep step, of v^n from the step's sweep; the update then kicks with a^n
-        (README "The projection without the symplectic step"). Collective. Skipped while
-        another scheme is in force (the gravity loading of `equilibrate` holds p
-        hydrostatic)."""
-        if self.scheme != SCHEME_PROJECTION:
-            return
+        correction (`PressureSolve.project`). After the kick (symplectic step) or, in the
+        one-sweep step, of v^n from the step's sweep; the update then kicks with a^n.
+        Collective. Declared only while the projection is in force (the gravity loading of
+        `equilibrate` holds p hydrostatic)."""
         self.pressure_solve.project()
-        st = self.store
-        self.slabs.refresh_halo(st.v, st.p, st.p_prev)
-        self._refresh_walls()
-        self.kernels.velocity_gradient_sums(st.n_owned, st.n_real, self.n_pairs, self.pairs,
-                                            self.pair_g, st.v, self.v_slip, st.poro, st.vol,
-                                            self.coupled, self.sums)
 
 
 def _bad_field(st: ParticleStore, i: int) -> str:

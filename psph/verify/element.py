@@ -48,6 +48,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from psph.kernels.bundles import (
+    DruckerPrager,
     PairFields,
     PairParams,
     PairRecord,
@@ -242,8 +243,8 @@ def reference_element(path: str, psi_deg: float, drained: bool, moment: Moment =
         grad = velocity_gradient(path, rate, e)
         trial = jaumann_elastic(stress, plain_gradient(grad, mom), par.soil.lam, par.soil.shear,
                                 par.dt)
-        r = dp_return(*trial, eps_p, par.soil.lam + 2 * par.soil.shear / 3, par.soil.shear, *dp,
-                      par.tension)
+        r = dp_return(*trial, eps_p, par.soil.lam + 2 * par.soil.shear / 3, par.soil.shear,
+                      DruckerPrager(*dp, par.tension))
         div = grad[0, 0] + grad[1, 1]
         p_new = 0.0 if drained else p - par.dt * par.K_l / n * div
         new = (np.array(r[:4]), eps_p + r[5], n + par.dt * (1 - n) * div, p_new)

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from psph.kernels.bundles import CellList, NonlocalFields
 from psph.kernels.neighbours import cell_lists_indexed
 from psph.kernels.nonlocal_strain import nonlocal_strain, nonlocal_strain_3d, rings_for
 
@@ -36,18 +37,18 @@ def nonlocal_strains(x: np.ndarray, vol: np.ndarray, eps_p: np.ndarray,
         local[:owned] = np.asarray(eps_p, float)[:owned]
         return [local.copy() for _ in weight_sets]
     h = 0.25 * float(lengths.max()) if h is None else h
-    cell_of, cell_start, order, ncell = cell_lists_indexed(x, h)
+    cells = CellList(*cell_lists_indexed(x, h))
     rings = rings_for(float(lengths.max()), 2 * h)
-    scratch = np.zeros(int(np.prod(ncell)), np.int8)
+    scratch = np.zeros(int(np.prod(cells.ncell)), np.int8)
     average = nonlocal_strain if x.shape[1] == 2 else nonlocal_strain_3d
     axis = np.array([a for a, _ in walls], np.int64)
     pos = np.array([p for _, p in walls], float)
+    fields = NonlocalFields(x, np.ascontiguousarray(vol, float),
+                            np.ascontiguousarray(eps_p, float), material)
     out = []
     for weights in weight_sets:
         hat = np.full(n, np.nan)
-        average(owned, n, x, np.ascontiguousarray(vol, float),
-                        np.ascontiguousarray(eps_p, float), material, lengths,
-                        np.asarray(weights, float), cell_of, cell_start, order, ncell, rings,
-                        scratch, axis, pos, hat)
+        average(owned, n, fields, lengths, np.asarray(weights, float), cells, rings, scratch,
+                axis, pos, hat)
         out.append(hat)
     return out
