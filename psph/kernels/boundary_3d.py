@@ -19,7 +19,7 @@ porosity, density and conductivity. Two things are 3D-specific:
   the soil between it and the surface (and p to the surface's). With the Shepard
   averages (weights W) and the normal stress read above the surface, as in 2D, a block
   n = 2, 4, 8 rows thick sliding on the surface got 0.70, 0.78, 0.83 of its Coulomb
-  friction (`psph/app/floor_friction.py`);
+  friction (`bench/studies/floor_friction.py`);
 - the wall-normal total stress is continued with the weight of the soil between j and b
   across the wall, min(-rho_j (b.n)(n.(x_b - x_j)), 0) (zero on a side wall, whose
   normal is horizontal), and the pore pressure difference p_b - p_j, as the plane ghosts

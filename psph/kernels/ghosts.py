@@ -27,7 +27,7 @@ with the ghost's own p. A plain mirror (sigma'_nn copied) puts a kink in it at t
 the bottom row of a column at rest then lacks (rho - rho_l) g dx of support, sinks by
 2.7 m/s^2 at t = 0, and the column settles into the lattice's odd-even (zig-zag) mode of
 sigma', which the pair-symmetric Eq. (26) cannot see and so never damps (1.5 % of the base
-stress in a column of one density; `bench/diagnostics/oddeven_stress_mode.py`).
+stress in a column of one density).
 
 The kernels take the fields as a `bundles.WallFields` and the walls as a `bundles.Walls`.
 """

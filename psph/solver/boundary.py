@@ -1,5 +1,5 @@
 """Rigid boundaries lined with boundary particles (the paper's virtual particles, ref.
-[11]): polylines in 2D (issue 16), surfaces in 3D (issue 37); set-up, the rows each rank
+[11]): polylines in 2D, surfaces in 3D; set-up, the rows each rank
 holds, their state each step, contact.
 
 The boundary particles of all polylines are built once on every rank: rows (k + 1/2) dx

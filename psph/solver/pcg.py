@@ -1,5 +1,5 @@
 """Matrix-free, Jacobi-preconditioned conjugate gradients over the owned particles
-(issue 14: the pressure solve of a projection scheme).
+(the pressure solve of the projection scheme).
 
 The operator, its diagonal and the halo refresh are passed in, so this module knows no
 equation and no communicator: `apply(q, out)` writes S q on the owned rows, `refresh(q)`

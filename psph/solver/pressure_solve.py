@@ -1,4 +1,4 @@
-"""The pressure solve of `pressure.scheme = "projection"` (issue 14) and the residual
+"""The pressure solve of `pressure.scheme = "projection"` and the residual
 monitor of the explicit and TPI pressures: one operator (`kernels/laplacian.py`), its
 right-hand side (`kernels/projection.py`), drained planes' images (`kernels/images.py`),
 and conjugate gradients with partition-independent inner products (`psph.solver.pcg`, or its
