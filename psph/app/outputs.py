@@ -201,6 +201,7 @@ class RunOutputs:
         sim.check_failure()  # never save a broken state
         info = {"t": sim.t, "step": sim.step, "n_global": sim.n_global,
                 "n_ids": sim.n_ids, "removals_done": sim.removals_done,
+                "trigger_done": sim.trigger_done,
                 "next_hist": self.next_hist, "scene": self.toml_text,
                 "monitor": None if self.monitor is None else self.monitor.state(),
                 "recycled_guess": sim.pressure_solve.recycled.state(),

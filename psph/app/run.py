@@ -229,6 +229,7 @@ def _simulation(scene: Scene, comm, meta: dict | None, state: dict | None,
     slabs = state["slabs"]
     sim = Simulation(scene, slabs, state["particles"], t=meta["t"], step=meta["step"],
                      n_ids=meta["n_ids"], removed=state["removed"],
-                     removals_done=meta["removals_done"])
+                     removals_done=meta["removals_done"],
+                     trigger_done=meta.get("trigger_done", False))
     _check_restart_census(sim, restart)
     return sim, probe_ids(scene, reducer=slabs.reducer, slab=slabs.slab)

@@ -87,7 +87,10 @@ class Material(_Model):
                        "materials [kg/m^3]")
     K_l: Pos = Field(1.0e9, description="Bulk modulus of the pore water; equal in all "
                      "materials [Pa]")
-    k: Pos = Field(description="Hydraulic conductivity at the initial void ratio [m/s]")
+    # k = 0: the no-flow limit, p follows the volumetric strain (Eq. 25 without its Darcy
+    # term), the counterpart of the penalty-based undrained models
+    k: Annotated[float, Field(ge=0.0)] = Field(
+        description="Hydraulic conductivity at the initial void ratio; 0: no flow [m/s]")
     g_ref: Pos = Field(9.81, description="Gravity that converts k to a permeability, gamma_l "
                        "= rho_l g_ref; equal in all materials [m/s^2]")
     C_k: Annotated[float, Field(ge=0.0)] = Field(

@@ -93,6 +93,9 @@ def check_scene(scene):
     mats = check_materials(scene)
     if scene.material is None:
         scene.material = mats[0]
+    if scene.trigger is not None and not any(m.model == "drucker_prager" for m in mats):
+        raise _Rule("trigger", "[trigger]", "needs a drucker_prager material (it reduces "
+                    "the strength and starts the softening of Eq. 17-19)")
     table = scene.initial.water_table
     if dim == 3 and isinstance(table, (int, float)):
         if table < lo[2]:
@@ -164,6 +167,12 @@ def check_scene(scene):
                         f"above the undrained wave limit {undrained_dt_limit(scene):.3e} s "
                         "of the explicit pressure update (Eq. 41 with the undrained "
                         "modulus; set time.allow_dt_above_solid_limit = true to force)")
+    if scene.pressure.scheme == "tpi":
+        for i, m in enumerate(scene.material_list):
+            if m.k == 0.0:
+                key = "material.k" if len(scene.material_list) == 1 else f"materials[{i}].k"
+                raise _Rule(key, 0.0, "no flow runs with the explicit or projection scheme: "
+                            "TPI's Eq. (38) has no storage term, so it needs k > 0")
     if scene.pressure.scheme == "tpi" and not scene.pressure.allow_unstable:
         check_tpi_stability(scene)
     check_integrator(scene)

@@ -276,6 +276,27 @@ class Verification(_Model):
                           "compare [-]")
 
 
+class Trigger(_Model):
+    """Failure triggered after the gravity loading, as del Castillo, Borja and Fávero Neto
+    (2026, doi:10.1002/nag.70322) start their slopes: until `at` the soil keeps its peak
+    strength and does not soften (η = 0, the loading at peak strength); at `at` the
+    strength is divided by `strength_factor` (a strength-reduction factor) and softening
+    starts at the material's η."""
+
+    at: Annotated[float, Field(ge=0.0)] = Field(
+        0.0, description="Time of the trigger; 0 is the run's start, after "
+        "initial.equilibrate [s]")
+    strength_factor: Annotated[float, Field(ge=1.0)] = Field(
+        1.0, description="Divides the peak cohesion and tan φ_p, and the residual ones "
+        "unless reduce_residual = false [-]")
+    reduce_residual: bool = Field(
+        True, description="Divide the residual strength (c_r, tan φ_r) by strength_factor "
+        "too")
+    reset_plastic_strain: bool = Field(
+        True, description="Set the equivalent plastic strain (and the plastic work) to 0 "
+        "at the trigger")
+
+
 class Removal(_Model):
     """Particles inside a region at time `at` are removed from the run: the gate of a
     collapse, an excavated slope toe, a river's cut. The region is a box (min, max) or a
@@ -383,6 +404,8 @@ class Scene(_Model):
                                        "compared at the end of the run")
     initial: Initial = Field(Initial(), description="In-situ state at t = 0")
     remove: list[Removal] = Field([], description="Regions of soil removed at given times")
+    trigger: Trigger | None = Field(None, description="Strength reduction and the start of "
+                                    "softening after the gravity loading")
     decomposition: Decomposition = Field(Decomposition(), description="Slab axis and load "
                                          "balancing")
     checkpoint: Checkpoint = Field(Checkpoint(), description="When restart checkpoints are "

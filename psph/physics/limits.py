@@ -114,7 +114,8 @@ def tpi_gain(scene, dt: float) -> float:
         G (dimensionless).
     """
     return max(dt * m.rho_l * m.g_ref / (((1 - m.porosity) * m.rho_s + m.porosity * m.rho_l)
-                                         * m.k) for m in scene.material_list)
+                                         * m.k) if m.k > 0.0 else math.inf
+               for m in scene.material_list)
 
 
 def tpi_gain_limit(alpha: float, gravity: bool = True) -> float:
@@ -142,7 +143,7 @@ def tpi_gain_limit(alpha: float, gravity: bool = True) -> float:
 
 def fluid_dt_limit(scene) -> float:
     """Delta t_l of Eq. (42): C_l n gamma_l h^2 / (K_l k); several materials: the most
-    restrictive.
+    restrictive; inf where no water flows (k = 0).
 
     Parameters
     ----------
@@ -155,4 +156,4 @@ def fluid_dt_limit(scene) -> float:
         The step limit (s).
     """
     return min(scene.time.cfl_fluid * m.porosity * (m.rho_l * m.g_ref) * scene.h**2
-               / (m.K_l * m.k) for m in scene.material_list)
+               / (m.K_l * m.k) if m.k > 0.0 else math.inf for m in scene.material_list)

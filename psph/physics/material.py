@@ -231,6 +231,39 @@ def material_table(scene) -> np.ndarray:
     return table
 
 
+def material_tables_of_trigger(scene, table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The material tables before and after the scene's `[trigger]`.
+
+    Before it, the soil does not soften (eta = 0 of Eq. 17-19: the gravity loading at peak
+    strength); after it, c_p and tan(phi_p), and unless `reduce_residual = false` c_r and
+    tan(phi_r), are divided by `strength_factor`, and eta is the material's.
+
+    Parameters
+    ----------
+    scene : Scene
+        the validated scene, with `trigger` set.
+    table : (n_materials, MAT_COLUMNS) float64 array
+        the scene's material table (`material_table`).
+
+    Returns
+    -------
+    before, after : (n_materials, MAT_COLUMNS) float64 arrays
+        new tables.
+    """
+    tr = scene.trigger
+    f = tr.strength_factor
+    before, after = table.copy(), table.copy()
+    before[:, MAT_DP + 5] = 0.0
+    reduce = [0, 2] + ([1, 3] if tr.reduce_residual else [])
+    for c in reduce:
+        col = after[:, MAT_DP + c]
+        if c in (0, 1):  # friction angles (rad): tan(phi) / f
+            after[:, MAT_DP + c] = np.arctan(np.tan(col) / f)
+        else:  # cohesions (Pa)
+            after[:, MAT_DP + c] = col / f
+    return before, after
+
+
 def stiffest(scene) -> ElasticSoil:
     """The material with the fastest solid wave sqrt(E / rho_s) of Eq. (41): the
     artificial viscosity's sound speed and the damping coefficient of Eq. (44) are taken

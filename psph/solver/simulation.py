@@ -35,6 +35,7 @@ from psph.physics.initial import initial_particles
 from psph.physics.material import (
     fastest_undrained,
     material_table,
+    material_tables_of_trigger,
     plasticity_parameters,
     soil_from_scene,
     stiffest,
@@ -56,13 +57,14 @@ class Simulation(Stages):
 
     def __init__(self, scene: Scene, slabs, particles: dict | None = None, t: float = 0.0,
                  step: int = 0, n_ids: int | None = None, removed: np.ndarray | None = None,
-                 removals_done: int = 0):
+                 removals_done: int = 0, trigger_done: bool = False):
         """`particles`: this rank's rows of every particle field (those of a checkpoint in
         its slab) with the clock (t, step) they belong to; default: the scene's initial
         particles of this rank's slab at t = 0, seeded here (no rank builds them all).
         `n_ids`: how many ids the run created (default: all particles), `removed`: this
         rank's share of the ids removed so far (a checkpoint's; see Census), and
-        `removals_done`: how many `remove` regions were applied already. Collective."""
+        `removals_done`: how many `remove` regions were applied already;
+        `trigger_done`: whether the scene's `[trigger]` was applied already. Collective."""
         self.scene = scene
         self.slabs = slabs
         self.dim = dim = scene.dim
@@ -167,6 +169,13 @@ class Simulation(Stages):
         # several materials: a row per material, indexed by the particle's
         # `material`; damping and the viscosity's sound speed from the stiffest one
         self.mat = material_table(scene)
+        # the [trigger]: no softening before it, the reduced strength after it
+        self.trigger_done = trigger_done
+        self._mat_after_trigger = None
+        if scene.trigger is not None:
+            before, after = material_tables_of_trigger(scene, self.mat)
+            self.mat = after if trigger_done else before
+            self._mat_after_trigger = after
         self.stiff = stiffest(scene)
         self.damping = self.stiff.damping_coefficient(scene.stabilisation.damping, self.h)
         self.coupled = scene.pressure.scheme != "none"
@@ -342,6 +351,19 @@ class Simulation(Stages):
             self.removals_done += 1
         return removed
 
+    def apply_trigger(self) -> None:
+        """The scene's `[trigger]` once its time has come (t is the same on every rank):
+        the reduced strength and softening from now on; the plastic strain and work set to
+        0 if asked, on every row (halo copies come with the next exchange)."""
+        if self._mat_after_trigger is None or self.trigger_done \
+                or self.t < self.scene.trigger.at * (1 - 1e-12):
+            return
+        self.mat = self._mat_after_trigger
+        if self.scene.trigger.reset_plastic_strain:
+            self.store.eps_p[:] = 0.0
+            self.store.plastic_work[:] = 0.0
+        self.trigger_done = True
+
     def _run_pipeline(self, stages: list[Stage], timed: bool = True) -> None:
         """One pass of `stages` at this step: each that is due runs (and is timed)."""
         self.passes += 1
@@ -360,6 +382,8 @@ class Simulation(Stages):
         """One step of the pipeline: removals due, dt and scheme at t, the stages."""
         if self.removals_done < len(self.removals):
             self.apply_removals()
+        if not self.trigger_done:
+            self.apply_trigger()
         self.dt, self.scheme = self.stepping.at(self.t)
         self._run_pipeline(self.stages)
         self.t += self.dt

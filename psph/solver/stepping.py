@@ -6,6 +6,7 @@ stage until `pressure.explicit_until`; the projection at the solid limit Eq. (41
 given `time.dt` overrides the main step. `limits` is what `summary.json` reports.
 """
 
+import math
 from dataclasses import dataclass, field
 
 from psph.config.schema import Scene
@@ -46,7 +47,7 @@ def time_stepping(scene: Scene) -> TimeStepping:
     else:
         dt_l = fluid_dt_limit(scene)
         dt_u = undrained_dt_limit(scene)
-        limits["dt_fluid_eq42"] = dt_l
+        limits["dt_fluid_eq42"] = dt_l if math.isfinite(dt_l) else None  # k = 0: no flow
         limits["dt_undrained_eq41"] = dt_u
         dt_exp = min(dt_s, dt_l, dt_u)
         if scheme == SCHEME_EXPLICIT:
