@@ -31,7 +31,7 @@ def test_full_disk_stops_with_one_line_naming_the_checkpoint_to_continue_from(
 
 def test_a_failed_checkpoint_write_removes_its_tmp_file(tmp_path, monkeypatch, capsys):
     """A quota the file system does not report: the write itself fails."""
-    import psph.app.run
+    import psph.app.outputs
 
     out = tmp_path / "run"
 
@@ -39,7 +39,7 @@ def test_a_failed_checkpoint_write_removes_its_tmp_file(tmp_path, monkeypatch, c
         path.with_name(path.name + ".tmp").write_bytes(b"partial")
         raise OSError(122, "Disk quota exceeded")
 
-    monkeypatch.setattr(psph.app.run, "write_checkpoint", failing)
+    monkeypatch.setattr(psph.app.outputs, "write_checkpoint", failing)
     assert cli.main(["run", "terzaghi_tpi", "--out", str(out), *RUN]) == 74
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "Disk quota exceeded" in lines[0], lines
